@@ -1,0 +1,38 @@
+"""Regression scores per target and their uniform average, in physical units.
+
+R^2 follows scikit-learn (a constant target scores 1.0 if predicted exactly, else 0.0).
+MAPE is in percent, with |y| floored at 1e-8 of the target's largest magnitude (or 1e-12)
+so a zero in the targets gives a large but finite figure, never a division by zero.
+"""
+import numpy as np
+from sklearn.metrics import mean_absolute_error, mean_squared_error, r2_score
+
+METRICS = ("r2", "rmse", "mae", "mape_pct")
+
+
+def _scores(true: np.ndarray, pred: np.ndarray) -> dict:
+    floor = max(1e-8 * float(np.max(np.abs(true))), 1e-12)
+    return {
+        "r2": float(r2_score(true, pred)) if len(true) > 1 else float("nan"),
+        "rmse": float(np.sqrt(mean_squared_error(true, pred))),
+        "mae": float(mean_absolute_error(true, pred)),
+        "mape_pct": float(100.0 * np.mean(np.abs(true - pred) / np.maximum(np.abs(true), floor))),
+    }
+
+
+def regression_metrics(y_true, y_pred, target_names: list[str]) -> dict:
+    """{target: {r2, rmse, mae, mape_pct}, ..., "average": uniform mean over targets}."""
+    y_true = np.asarray(y_true, dtype=np.float64).reshape(len(y_true), -1)
+    y_pred = np.asarray(y_pred, dtype=np.float64).reshape(y_true.shape)
+    scores = {name: _scores(y_true[:, k], y_pred[:, k]) for k, name in enumerate(target_names)}
+    scores["average"] = {m: float(np.mean([scores[t][m] for t in target_names])) for m in METRICS}
+    return scores
+
+
+def format_table(metrics: dict, splits=("val", "test")) -> str:
+    """A plain-text table: one row per split and target, one column per metric."""
+    lines = [f"{'split':<6}{'target':<14}" + "".join(f"{m:>12}" for m in METRICS)]
+    for split in splits:
+        for target, row in metrics[split].items():
+            lines.append(f"{split:<6}{target:<14}" + "".join(f"{row[m]:>12.4g}" for m in METRICS))
+    return "\n".join(lines)

@@ -1,0 +1,43 @@
+"""TensorBoard logging of one run: per-epoch curves, final metrics, hyper-parameters, figures.
+
+Writes real event files (torch's SummaryWriter) that `tensorboard --logdir <run>/tensorboard`
+shows; hyper-parameters go to the `hparams` sub-run so the HPARAMS tab can compare runs.
+"""
+from torch.utils.tensorboard import SummaryWriter
+
+
+def _scalar_hparams(flat: dict) -> dict:
+    """add_hparams takes only int, float, str, bool: stringify the rest (lists, None)."""
+    return {k: v if isinstance(v, (int, float, str, bool)) else str(v) for k, v in flat.items()}
+
+
+class TensorBoardLogger:
+    def __init__(self, log_dir: str):
+        self.log_dir = log_dir
+
+    def __enter__(self):
+        self.writer_ = SummaryWriter(log_dir=self.log_dir)
+        return self
+
+    def __exit__(self, *exc):
+        self.writer_.close()
+
+    def log_epoch(self, record: dict) -> None:
+        step = record["epoch"]
+        self.writer_.add_scalar("loss/train", record["train_loss"], step)
+        self.writer_.add_scalar("loss/val", record["val_loss"], step)
+        self.writer_.add_scalar("lr", record["lr"], step)
+
+    def log_metrics(self, metrics: dict, prefix: str) -> None:
+        for target, row in metrics.items():
+            for name, value in row.items():
+                self.writer_.add_scalar(f"{prefix}/{target}/{name}", value)
+
+    def log_hparams(self, hparams: dict, final: dict) -> None:
+        self.writer_.add_hparams(_scalar_hparams(hparams), final, run_name="hparams")
+
+    def log_figure(self, tag: str, figure) -> None:
+        self.writer_.add_figure(tag, figure, close=False)
+
+    def flush(self) -> None:
+        self.writer_.flush()

@@ -1,0 +1,27 @@
+"""Train and evaluate one Touchstone model: `python train.py model=resmlp scene.n_samples=2000 seed=3`.
+
+Thin on purpose: Hydra composes the config, models/run_regression.py does the work, and a
+user-input problem ends in one line on stderr and exit code 2 instead of a traceback.
+"""
+import sys
+
+import hydra
+from hydra.core.hydra_config import HydraConfig
+from omegaconf import DictConfig
+
+from data.errors import InputError
+from models.run_regression import run
+
+
+@hydra.main(version_base="1.3", config_path="configs", config_name="config")
+def main(cfg: DictConfig) -> float:
+    try:
+        metrics = run(cfg, HydraConfig.get().runtime.output_dir)
+    except InputError as error:
+        print(f"error: {error}", file=sys.stderr)
+        sys.exit(2)
+    return metrics["val"]["average"]["r2"]  # the value a Hydra sweeper would optimise
+
+
+if __name__ == "__main__":
+    main()
