@@ -146,7 +146,7 @@ class ResMLPRegressor(BaseEstimator, RegressorMixin):
                 optimiser.zero_grad()
                 loss.backward()
                 optimiser.step()
-                total, seen = total + float(loss) * len(batch), seen + len(batch)
+                total, seen = total + loss.item() * len(batch), seen + len(batch)
             train_loss = total / max(seen, 1)
             val_loss = self._mse(Xv, yv)
             if not (math.isfinite(train_loss) and math.isfinite(val_loss)):

@@ -1,0 +1,27 @@
+from pathlib import Path
+
+import pytest
+from hydra import compose, initialize_config_dir
+
+CONFIG_DIR = str(Path(__file__).resolve().parents[1] / "configs")
+
+# Tiny settings that keep a whole run to a few seconds.
+TINY = ["scene.n_samples=120", "scene.grid_nodes=21", "scene.progress=false",
+        "trainer.max_epochs=4", "trainer.progress=false",
+        "model.n_estimators=10"]
+
+
+@pytest.fixture
+def compose_config():
+    """Compose the real Hydra config with overrides, as train.py would see it."""
+    def _compose(overrides=()):
+        with initialize_config_dir(config_dir=CONFIG_DIR, version_base="1.3"):
+            return compose(config_name="config", overrides=list(overrides))
+    return _compose
+
+
+def tiny(model: str) -> list[str]:
+    overrides = [f"model={model}"] + [o for o in TINY if not o.startswith("model.")]
+    if model in ("random_forest", "extra_trees"):
+        overrides.append("model.n_estimators=10")
+    return overrides

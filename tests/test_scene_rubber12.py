@@ -1,0 +1,109 @@
+"""Physics checks on the rubber12 scene: the solve is real, symmetric where it must be,
+local where it must be, and reproducible."""
+import numpy as np
+import pytest
+
+from data.contact import flat_punch_force_n
+from data.errors import InputError
+from data.rubber12 import Rubber12Scene
+
+PHYSICS = {"contact": {}, "percolation": {}}
+NOISY = {**PHYSICS, "temperature_drift": {}, "adc": {}}
+
+
+def press(x, y, depth, effects=PHYSICS, **kwargs):
+    """Readings (ohms) for presses at the given points, via the lab protocol's machinery."""
+    scene = Rubber12Scene(n_samples=1, effects=effects, progress=False, **kwargs)
+    scene._presses = lambda: (np.atleast_1d(np.asarray(x, float)), np.atleast_1d(np.asarray(y, float)),
+                              np.atleast_1d(np.asarray(depth, float)), np.arange(np.size(x)))
+    scene.n_samples = int(np.size(x))
+    return scene.generate()
+
+
+def test_centre_press_gives_mirror_symmetric_channels():
+    r = press(25.0, 25.0, 2.0).channels[0]
+    side_pairs = r[[0, 1, 3, 4, 6, 7, 9, 10]]     # two electrodes on one side
+    corner_pairs = r[[2, 5, 8, 11]]              # electrodes around a corner
+    np.testing.assert_allclose(side_pairs, side_pairs[0], rtol=1e-9)
+    np.testing.assert_allclose(corner_pairs, corner_pairs[0], rtol=1e-9)
+    assert not np.isclose(side_pairs[0], corner_pairs[0], rtol=1e-3)
+
+
+def test_mirrored_press_permutes_channels():
+    # Mirroring x -> 50 - x maps electrode e_k to e_{(4 - k) mod 12}, so channel c maps to ((2 - c) mod 12) + 1.
+    table = press([14.0, 36.0], [31.0, 31.0], [2.5, 2.5])
+    r, mirrored = table.channels
+    mapping = [((2 - c) % 12) for c in range(1, 13)]  # 0-based index of the mirror channel
+    np.testing.assert_allclose(mirrored, r[mapping], rtol=1e-9)
+    assert not np.allclose(mirrored, r, rtol=1e-3)  # the press is off-centre: channels really differ
+
+
+@pytest.mark.parametrize("electrode, point, channels", [
+    (2, (25.0, 45.0), {0, 1}),    # e2 sits mid-top: its channels are e1-e2 and e2-e3
+    (5, (45.0, 25.0), {3, 4}),    # e5 sits mid-right: channels e4-e5 and e5-e6
+    (9, (12.5, 5.0), {7, 8}),     # e9 sits at x = 12.5 on the bottom
+])
+def test_press_near_an_electrode_moves_its_channels_most(electrode, point, channels):
+    rest = press(25.0, 25.0, 0.0).channels[0]
+    r = press(*point, 3.0).channels[0]
+    change = np.abs(r - rest) / rest
+    assert set(np.argsort(change)[-2:]) == channels, change
+
+
+def test_force_rises_monotonically_with_depth_at_every_position():
+    scene = Rubber12Scene(n_samples=90, effects=PHYSICS, progress=False)
+    table = scene.generate()
+    frame = table.frame
+    for (x, y), rows in frame.groupby(["x_mm", "y_mm"]):
+        rows = rows.sort_values("depth_mm")
+        assert len(rows) == 10
+        assert np.all(np.diff(rows["pressure_pa"]) > 0), (x, y)
+        # deeper presses compress more filler together: the nearest channel's resistance falls
+        assert np.all(np.diff(rows[table.channel_columns].min(axis=1)) < 0), (x, y)
+
+
+def test_flat_punch_force_is_linear_in_depth_and_in_the_papers_range():
+    depth = np.linspace(0.3, 3.0, 10)
+    half_space = flat_punch_force_n(depth, 3.5, 1e5)
+    np.testing.assert_allclose(half_space / depth, half_space[0] / depth[0], rtol=1e-12)
+    # E* = 4E/3 at nu = 0.5: F = 2 a E* d = 2 * 3.5e-3 * 1.333e5 * 3e-3 = 2.8 N at 3 mm
+    assert half_space[-1] == pytest.approx(2.8, rel=1e-3)
+    layered_soft, layered_stiff = (flat_punch_force_n(depth, 3.5, e, thickness_mm=6.0) for e in (5e4, 2e5))
+    assert 0.2 < layered_soft[0] < 0.5 and 8 < layered_stiff[-1] < 13  # physics notes: ~0.3-11 N
+
+
+def test_same_seed_gives_identical_data_and_another_seed_differs():
+    a = Rubber12Scene(n_samples=40, effects=NOISY, seed=7, progress=False).generate().frame
+    b = Rubber12Scene(n_samples=40, effects=NOISY, seed=7, progress=False).generate().frame
+    c = Rubber12Scene(n_samples=40, effects=NOISY, seed=8, progress=False).generate().frame
+    assert a.equals(b)
+    assert not a.equals(c)
+
+
+def test_repeated_presses_vary_like_the_lab_with_noise_effects():
+    table = Rubber12Scene(n_samples=450, effects=NOISY, progress=False).generate()
+    frame = table.frame.assign(group=table.groups)
+    spread = frame.groupby("group")[table.channel_columns].agg(lambda v: v.std() / v.mean())
+    assert 0.0 < spread.to_numpy().max() < 0.023  # the lab's repeat CV was below 2.3 %
+
+
+def test_random_protocol_stays_in_range_and_is_seeded():
+    table = Rubber12Scene(n_samples=50, protocol="random", effects=PHYSICS, progress=False).generate()
+    frame = table.frame
+    assert frame[["x_mm", "y_mm"]].to_numpy().min() >= 5 and frame[["x_mm", "y_mm"]].to_numpy().max() <= 45
+    assert frame["depth_mm"].between(0.3, 3.0).all()
+    assert len(np.unique(table.groups)) == 50
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"n_samples": -5}, "n_samples"),
+    ({"effects": {"contact": {}, "sparkle": {}}}, "unknown effect 'sparkle'"),
+    ({"effects": {"contact": {"colour": 1}}}, "has no parameter 'colour'"),
+    ({"protocol": "spiral"}, "protocol"),
+    ({"depth_range_mm": (0.3, 9.0)}, "depth_range_mm"),
+    ({"measurement": [[1, 1]]}, "measurement pairs"),
+])
+def test_bad_scene_settings_are_one_line_errors(kwargs, message):
+    with pytest.raises(InputError, match=message) as error:
+        Rubber12Scene(**{"effects": PHYSICS, "progress": False, **kwargs}).generate()
+    assert "\n" not in str(error.value)

@@ -1,0 +1,90 @@
+"""End to end through Hydra: every model config composes with tiny settings and a run writes
+every output; bad configs fail with one line and a non-zero exit."""
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import pandas as pd
+import pytest
+from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+
+from conftest import tiny
+from models.run_regression import run
+
+ROOT = Path(__file__).resolve().parents[1]
+MODELS = sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml"))
+
+
+def test_every_model_config_is_tested():
+    assert set(MODELS) >= {"resmlp", "random_forest", "extra_trees", "decision_tree"}
+
+
+@pytest.mark.parametrize("model", MODELS)
+def test_a_run_writes_every_output(compose_config, tmp_path, model):
+    cfg = compose_config(tiny(model))
+    metrics = run(cfg, tmp_path)
+
+    for name in ("metrics.json", "predictions.csv", "parity.png"):
+        assert (tmp_path / name).stat().st_size > 0, name
+    assert not list(tmp_path.glob(".*.tmp*")) and not list(tmp_path.glob(".metrics*"))  # no leftovers
+    saved = json.loads((tmp_path / "metrics.json").read_text())
+    assert saved["fit_time_s"] > 0
+    for split in ("val", "test"):
+        assert set(saved[split]) == {"x_mm", "y_mm", "depth_mm", "pressure_pa", "average"}
+        assert set(saved[split]["average"]) == {"r2", "rmse", "mae", "mape_pct"}
+    assert saved == json.loads(json.dumps(metrics))
+
+    predictions = pd.read_csv(tmp_path / "predictions.csv")
+    assert len(predictions) == saved["data"]["n_test"]
+    assert {"true_depth_mm", "pred_depth_mm", "true_pressure_pa", "pred_pressure_pa"} <= set(predictions)
+
+    events = EventAccumulator(str(tmp_path / "tensorboard")).Reload()
+    scalars = events.Tags()["scalars"]
+    assert "test/x_mm/r2" in scalars and "cost/fit_time_s" in scalars
+    assert events.Tags()["images"] == ["parity/test"]
+    if model == "resmlp":
+        losses = events.Scalars("loss/train")
+        assert [e.step for e in losses] == list(range(1, len(losses) + 1)) and len(losses) >= 2
+        assert len(events.Scalars("loss/val")) == len(losses) and "lr" in scalars
+    assert list((tmp_path / "tensorboard" / "hparams").glob("events.out.tfevents.*"))
+
+
+def test_a_users_table_runs_like_a_scene(compose_config, tmp_path):
+    from data.rubber12 import Rubber12Scene
+    table = Rubber12Scene(n_samples=120, grid_nodes=21, progress=False,
+                          effects={"contact": {}, "percolation": {}, "adc": {}}).generate()
+    path = tmp_path / "rig.parquet"
+    table.frame.to_parquet(path)
+    cfg = compose_config(tiny("extra_trees") + ["data=table", f"data.path={path}", "data.split=grouped"])
+    metrics = run(cfg, tmp_path / "run")
+    assert metrics["data"]["split"] == "grouped" and metrics["data"]["source"]["path"] == str(path)
+    assert (tmp_path / "run" / "metrics.json").exists()
+
+
+def train(*overrides, cwd):
+    return subprocess.run([sys.executable, str(ROOT / "train.py"), *overrides, f"hydra.run.dir={cwd}/run"],
+                          capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+@pytest.mark.parametrize("overrides, message, code", [
+    (["model=gradient_magic"], "Could not find 'model/gradient_magic'", 1),
+    (["scene.n_samples=-5"], "error: scene.n_samples must be a positive integer, got -5", 2),
+    (["scene.sparkle=1"], "Key 'sparkle' is not in struct", 1),
+    (["+scene.effects.sparkle={}"], "error: scene rubber12: unknown effect 'sparkle'", 2),
+])
+def test_bad_config_values_fail_with_a_clear_message(tmp_path, overrides, message, code):
+    result = train(*overrides, cwd=tmp_path)
+    assert result.returncode == code, result.stderr
+    assert message in result.stderr
+    assert "Traceback" not in result.stderr
+    assert not (tmp_path / "run" / "metrics.json").exists()
+    if code == 2:
+        assert result.stderr.strip().count("\n") == 0  # exactly one line
+
+
+def test_train_py_writes_under_the_run_dir_only(tmp_path):
+    result = train(*tiny("decision_tree"), cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
+    assert (tmp_path / "run" / "metrics.json").exists() and (tmp_path / "run" / ".hydra" / "config.yaml").exists()
