@@ -120,6 +120,97 @@ class SheetSolver:
 
 
 def pair_resistance_ohm(z: np.ndarray, pairs: np.ndarray) -> np.ndarray:
-    """Two-terminal resistance between electrode pairs (0-based), from transfer matrix Z."""
+    """Two-terminal resistance between electrode pairs (0-based) from transfer matrices Z of
+    shape (..., n_electrodes, n_electrodes): R_ij = Z_ii + Z_jj - 2 Z_ij."""
     i, j = pairs[:, 0], pairs[:, 1]
-    return z[i, i] + z[j, j] - 2.0 * z[i, j]
+    return z[..., i, i] + z[..., j, j] - 2.0 * z[..., i, j]
+
+
+class PatchUpdateSolver:
+    """Exact transfer resistances for many presses that each change only a small patch.
+
+    A press changes the conductance of the few edges under the probe, so the grounded
+    Laplacian changes only in the block of the nodes V those edges touch:
+    L = L0 + S^T dL S, with S selecting V. The push-through form of the Woodbury identity gives
+
+        Z = Z0 - P^T (I + dL G)^-1 dL P,   G = L0^-1[V, V],   P = L0^-1[V, electrodes],
+
+    so with L0^-1 factorised once (densely) per geometry and base conductance, each press costs
+    one |V| x |V| solve (|V| ~ 70 nodes for the 7 mm probe) instead of a sparse LU of the whole
+    grid, and batches of presses are solved together. It is the same solution as SheetSolver's
+    to rounding (tested), not an approximation. Presses that touch more than `max_patch_nodes`
+    nodes fall back to the full sparse solve.
+    """
+
+    def __init__(self, solver: SheetSolver, base_conductance_s: float, max_patch_nodes: int = 300):
+        self.solver = solver
+        self.base_conductance_s = base_conductance_s
+        self.max_patch_nodes = max_patch_nodes
+        n_free = solver._free.size
+        g0 = solver.edge_weight * base_conductance_s
+        laplacian = (solver._incidence.T @ sp.diags(g0) @ solver._incidence).toarray()
+        # One extra row/column of zeros stands for the grounded electrode (potential 0): an
+        # edge into it changes only its other end's row, which the zeros reproduce exactly.
+        inverse = np.zeros((n_free + 1, n_free + 1))
+        inverse[:n_free, :n_free] = np.linalg.inv(laplacian)
+        self._inverse = inverse
+        # Endpoints of every edge in the free-unknown numbering (ground -> n_free).
+        incidence = solver._incidence.tocoo()
+        ends = np.full((incidence.shape[0], 2), n_free)
+        ends[incidence.row, np.where(incidence.data > 0, 0, 1)] = incidence.col
+        self._ends = ends
+        self._n = n_free + 1
+        self._z0 = inverse[: solver.n_electrodes - 1, : solver.n_electrodes - 1].copy()
+
+    def transfer_resistance(self, node_conductance_s: np.ndarray, chunk: int = 256) -> np.ndarray:
+        """(n_presses, n_electrodes, n_electrodes) Z for (n_presses, n_nodes) conductance maps."""
+        g = np.atleast_2d(node_conductance_s)
+        n, m = len(g), self.solver.n_electrodes
+        z = np.zeros((n, m, m))
+        for start in range(0, n, chunk):
+            part = slice(start, min(start + chunk, n))
+            z[part, :-1, :-1] = self._update(g[part])
+        return z
+
+    def _update(self, g: np.ndarray) -> np.ndarray:
+        s, m = self.solver, self.solver.n_electrodes - 1
+        out = np.broadcast_to(self._z0, (len(g), m, m)).copy()
+        # An edge changes only if one of its nodes does (testing the harmonic mean itself
+        # would flag every edge: 2gg/(g+g) need not round back to g).
+        moved = g != self.base_conductance_s
+        changed = moved[:, s.edges[:, 0]] | moved[:, s.edges[:, 1]]
+        row, edge = np.nonzero(changed)
+        if row.size == 0:
+            return out
+        ga, gb = g[row, s.edges[edge, 0]], g[row, s.edges[edge, 1]]
+        delta = s.edge_weight[edge] * (2.0 * ga * gb / (ga + gb) - self.base_conductance_s)
+        a, b = self._ends[edge, 0], self._ends[edge, 1]
+
+        touched = np.zeros((len(g), self._n), dtype=bool)
+        touched[row, a] = touched[row, b] = True
+        sizes = touched.sum(axis=1)
+        for wide in np.flatnonzero(sizes > self.max_patch_nodes):  # too wide for a low-rank update
+            out[wide] = s.transfer_resistance(g[wide])[:-1, :-1]
+        narrow = sizes <= self.max_patch_nodes
+        v = int(sizes[narrow].max()) if narrow.any() else 0
+        if v == 0:
+            return out
+        # V: each press's touched nodes, padded with untouched ones (their dL rows are zero).
+        nodes = np.argsort(~touched, axis=1, kind="stable")[:, :v]
+        local = np.zeros((len(g), self._n), dtype=np.int64)
+        np.put_along_axis(local, nodes, np.arange(v)[None], axis=1)
+        keep = narrow[row]
+        r, la, lb, d = row[keep], local[row[keep], a[keep]], local[row[keep], b[keep]], delta[keep]
+        dL = np.zeros((len(g), v, v))
+        np.add.at(dL, (r, la, la), d)
+        np.add.at(dL, (r, lb, lb), d)
+        np.add.at(dL, (r, la, lb), -d)
+        np.add.at(dL, (r, lb, la), -d)
+
+        inv = self._inverse
+        G = inv[nodes[:, :, None], nodes[:, None, :]]
+        P = inv[nodes, :m]
+        M = np.eye(v)[None] + dL @ G
+        update = np.einsum("nvi,nvj->nij", P, np.linalg.solve(M, dL @ P))
+        out[narrow] -= update[narrow]
+        return out

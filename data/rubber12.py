@@ -7,21 +7,24 @@ flat cylindrical probe (7 mm diameter) indents the sheet at (x_mm, y_mm) to dept
 
 Protocol: `lab` cycles through nine press points P1-P9 (a 3 x 3 grid, row by row from the
 top-left) and `n_depth_steps` depths from 0.3 to 3.0 mm (5-50 % of the gel), repeating the
-90 position-depth pairs until `n_samples` presses; `random` draws positions and depths
-uniformly. Each channel is the two-terminal resistance between an electrode pair from a real
+position-depth pairs until `n_samples` presses; at each point the depths go up
+(`sequence: up`) or up and back down (`up_down`, where hysteresis shows); every press is
+press-hold-retract. `random` draws positions and depths uniformly. Each channel is the two-terminal resistance between an electrode pair from a real
 solve of the sheet's current flow (data/conduction.py); the default pattern measures each
 electrode against its clockwise neighbour, giving channels r_01_ohm ... r_12_ohm.
 
 Physics comes only from the listed effects (data/rubber12_effects.py).
 """
+from functools import lru_cache
+
 import numpy as np
 import pandas as pd
 from tqdm.auto import tqdm
 
-from data.conduction import SheetGrid, SheetSolver, pair_resistance_ohm
+from data.conduction import PatchUpdateSolver, SheetGrid, SheetSolver, pair_resistance_ohm
 from data.effects import resolve_effects, stream
 from data.errors import InputError
-from data.rubber12_effects import EFFECTS, FIELD_EFFECTS
+from data.rubber12_effects import EFFECTS, FIELD_EFFECTS, READING_EFFECTS
 from data.table import SensorTable
 
 TARGETS = ["x_mm", "y_mm", "depth_mm", "pressure_pa"]
@@ -65,9 +68,9 @@ class Rubber12Scene:
 
     def __init__(self, n_samples=450, protocol="lab", seed=0, effects=None,
                  side_mm=50.0, gel_thickness_mm=6.0, probe_radius_mm=3.5,
-                 sheet_resistance_ohm_per_sq=1.0e4, electrode_width_mm=2.5, grid_nodes=41,
+                 sheet_resistance_ohm_per_sq=1.0e4, electrode_width_mm=2.5, grid_nodes=33,
                  press_points_mm=(12.5, 25.0, 37.5), depth_range_mm=(0.3, 3.0), n_depth_steps=10,
-                 position_range_mm=(5.0, 45.0), measurement="adjacent", progress=True):
+                 position_range_mm=(5.0, 45.0), sequence="up", measurement="adjacent", progress=True):
         self.n_samples = n_samples
         self.protocol = protocol
         self.seed = seed
@@ -82,6 +85,7 @@ class Rubber12Scene:
         self.depth_range_mm = depth_range_mm
         self.n_depth_steps = n_depth_steps
         self.position_range_mm = position_range_mm
+        self.sequence = sequence
         self.measurement = measurement
         self.progress = progress
 
@@ -95,8 +99,12 @@ class Rubber12Scene:
                              f"({self.gel_thickness_mm} mm), got {list(self.depth_range_mm)}")
         if self.protocol not in ("lab", "random"):
             raise InputError(f"scene.protocol must be 'lab' or 'random', got '{self.protocol}'")
-        if self.grid_nodes < 5 or self.sheet_resistance_ohm_per_sq <= 0:
-            raise InputError("scene.grid_nodes must be >= 5 and sheet_resistance_ohm_per_sq > 0")
+        if self.sequence not in ("up", "up_down"):
+            raise InputError(f"scene.sequence must be 'up' or 'up_down', got '{self.sequence}'")
+        if self.grid_nodes < 5 or (self.grid_nodes - 1) % 4 or self.sheet_resistance_ohm_per_sq <= 0:
+            raise InputError(f"scene.grid_nodes must be 4k + 1 >= 5 (so electrodes sit on nodes) and "
+                             f"sheet_resistance_ohm_per_sq > 0, got {self.grid_nodes} and "
+                             f"{self.sheet_resistance_ohm_per_sq}")
 
     def press_points(self) -> np.ndarray:
         """P1..P9 as (x, y) in mm, row by row from the top-left."""
@@ -104,71 +112,93 @@ class Rubber12Scene:
         return np.array([(x, y) for y in grid[::-1] for x in grid])
 
     def _presses(self):
-        """x, y, depth (mm) and a group id per press (one group per position-depth pair)."""
+        """x, y, depth (mm), a group id per press (one per position-depth pair) and whether the
+        press is reached from a deeper one at the same point (the unloading branch)."""
         n = self.n_samples
         low, high = self.depth_range_mm
         if self.protocol == "lab":
             points = self.press_points()
-            depths = np.linspace(low, high, self.n_depth_steps)
-            pair = np.arange(n) % (len(points) * len(depths))
-            xy = points[pair // len(depths)]
-            return xy[:, 0], xy[:, 1], depths[pair % len(depths)], pair
+            depth_steps = np.arange(self.n_depth_steps)
+            if self.sequence == "up_down":
+                depth_steps = np.r_[depth_steps, depth_steps[-2::-1]]
+            step = np.arange(n) % (len(points) * len(depth_steps))
+            point, level = step // len(depth_steps), depth_steps[step % len(depth_steps)]
+            xy = points[point]
+            depth = np.linspace(low, high, self.n_depth_steps)[level]
+            unloading = np.r_[False, (point[1:] == point[:-1]) & (level[1:] < level[:-1])]
+            return xy[:, 0], xy[:, 1], depth, point * self.n_depth_steps + level, unloading
         rng = stream(self.seed, "protocol")
         lo, hi = self.position_range_mm
         xy = rng.uniform(lo, hi, size=(n, 2))
-        return xy[:, 0], xy[:, 1], rng.uniform(low, high, size=n), np.arange(n)
+        return xy[:, 0], xy[:, 1], rng.uniform(low, high, size=n), np.arange(n), np.zeros(n, dtype=bool)
 
     # -- simulation -------------------------------------------------------------------------
-    def _solver(self) -> SheetSolver:
-        grid = SheetGrid(self.side_mm, self.grid_nodes, electrode_positions_mm(self.side_mm),
-                         self.electrode_width_mm)
-        return SheetSolver(grid)
+    def _solvers(self):
+        return _solvers(float(self.side_mm), int(self.grid_nodes), float(self.electrode_width_mm),
+                        float(self.sheet_resistance_ohm_per_sq))
 
     def generate(self) -> SensorTable:
+        """Run the protocol: `n_samples` presses through the listed effects."""
         self._check()
+        return self.simulate(*self._presses())
+
+    def simulate(self, x_mm, y_mm, depth_mm, groups=None, unloading=None, chunk: int = 1024) -> SensorTable:
+        """Readings for arbitrary presses (arrays of x, y, depth in mm), through the listed effects."""
+        x, y, depth = (np.atleast_1d(np.asarray(v, dtype=float)) for v in (x_mm, y_mm, depth_mm))
+        groups = np.arange(len(x)) if groups is None else np.asarray(groups)
+        unloading = np.zeros(len(x), dtype=bool) if unloading is None else np.asarray(unloading, dtype=bool)
         effects = resolve_effects(self.name, self.effects, EFFECTS)
-        pairs = measurement_pairs(self.measurement)
-        solver = self._solver()
-        x, y, depth, groups = self._presses()
-        state = {"x_mm": x, "y_mm": y, "depth_mm": depth,
-                 "force_n": np.zeros_like(depth), "pressure_pa": np.zeros_like(depth),
-                 "node_xy_mm": solver.grid.node_xy_mm,
-                 "geometry": {"probe_radius_mm": self.probe_radius_mm,
-                              "gel_thickness_mm": self.gel_thickness_mm}}
-
         field_effects = [e for e in effects if e[0] in FIELD_EFFECTS]
-        reading_effects = [e for e in effects if e[0] not in FIELD_EFFECTS]
-        for name, fn, params in field_effects:
-            fn(state, stream(self.seed, name), **params)
-
+        reading_effects = [e for e in effects if e[0] in READING_EFFECTS]
+        pairs = measurement_pairs(self.measurement)
+        solver, fast = self._solvers()
+        geometry = {"probe_radius_mm": self.probe_radius_mm, "gel_thickness_mm": self.gel_thickness_mm,
+                    "spacing_mm": solver.grid.spacing_mm}
+        node_xy = solver.grid.node_xy_mm
         base = 1.0 / self.sheet_resistance_ohm_per_sq
-        scale = np.broadcast_to(state.get("conductance_scale", 1.0), (len(x), solver.grid.n_nodes**2))
-        readings = np.empty((len(x), len(pairs)))
-        # Presses that share one conductance map (no effect touched it) share one solve.
-        uniform = not np.ndim(state.get("conductance_scale", 1.0))
-        bar = tqdm(total=len(x), desc="rubber12: solving current flow", unit="press",
-                   disable=not self.progress or len(x) < 500 or uniform, leave=False)
-        for k in range(len(x)):
-            if uniform and k > 0:
-                readings[k] = readings[0]
-                continue
-            readings[k] = pair_resistance_ohm(solver.transfer_resistance(base * scale[k]), pairs)
-            bar.update()
+
+        n = len(x)
+        readings, force, pressure = np.empty((n, len(pairs))), np.zeros(n), np.zeros(n)
+        bar = tqdm(total=n, desc="rubber12", unit="press", leave=False,
+                   disable=not self.progress or n < 5000)
+        # Field effects and the solve go chunk by chunk so memory stays flat in n_samples.
+        for start in range(0, n, chunk):
+            part = slice(start, min(start + chunk, n))
+            state = {"x_mm": x[part], "y_mm": y[part], "depth_mm": depth[part],
+                     "unloading": unloading[part], "node_xy_mm": node_xy, "geometry": geometry}
+            for _, fn, params in field_effects:
+                fn(state, **params)
+            scale = np.broadcast_to(state.get("conductance_scale", 1.0), (len(state["x_mm"]), len(node_xy)))
+            z = fast.transfer_resistance(base * scale)
+            readings[part] = pair_resistance_ohm(z, pairs)
+            force[part] = state.get("force_n", 0.0)
+            pressure[part] = state.get("pressure_pa", 0.0)
+            bar.update(len(state["x_mm"]))
         bar.close()
 
-        state["resistance_ohm"] = readings
+        state = {"resistance_ohm": readings, "pairs": pairs}
         for name, fn, params in reading_effects:
             fn(state, stream(self.seed, name), **params)
 
-        channels = [f"r_{k + 1:02d}_ohm" for k in range(len(pairs))]
+        unit = state.get("channel_unit", "ohm")
+        channels = [f"r_{k + 1:02d}_{unit}" for k in range(len(pairs))]
         frame = pd.DataFrame(state["resistance_ohm"], columns=channels)
-        for column, values in zip(TARGETS, (x, y, depth, state["pressure_pa"])):
+        for column, values in zip(TARGETS, (x, y, depth, pressure)):
             frame[column] = values
         description = {"source": "scene", "scene": self.name, "protocol": self.protocol,
-                       "effects": [name for name, _, _ in effects], "n_samples": len(x),
-                       "force_n_range": [float(state["force_n"].min()), float(state["force_n"].max())]}
+                       "effects": [name for name, _, _ in effects], "n_samples": n,
+                       "force_n_range": [float(force.min()), float(force.max())]}
         return SensorTable(frame, channels, list(TARGETS), groups, description)
 
     def load(self) -> SensorTable:
         """Datamodule entry point: scenes and user tables both `load()` a SensorTable."""
         return self.generate()
+
+
+@lru_cache(maxsize=4)
+def _solvers(side_mm, grid_nodes, electrode_width_mm, sheet_resistance_ohm_per_sq):
+    """The exact sparse solver and its patch-update companion for one geometry, built once per
+    process (the dense baseline inverse takes ~0.2 s at 41 x 41 nodes)."""
+    grid = SheetGrid(side_mm, grid_nodes, electrode_positions_mm(side_mm), electrode_width_mm)
+    solver = SheetSolver(grid)
+    return solver, PatchUpdateSolver(solver, 1.0 / sheet_resistance_ohm_per_sq)

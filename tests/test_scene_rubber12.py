@@ -12,12 +12,8 @@ NOISY = {**PHYSICS, "temperature_drift": {}, "adc": {}}
 
 
 def press(x, y, depth, effects=PHYSICS, **kwargs):
-    """Readings (ohms) for presses at the given points, via the lab protocol's machinery."""
-    scene = Rubber12Scene(n_samples=1, effects=effects, progress=False, **kwargs)
-    scene._presses = lambda: (np.atleast_1d(np.asarray(x, float)), np.atleast_1d(np.asarray(y, float)),
-                              np.atleast_1d(np.asarray(depth, float)), np.arange(np.size(x)))
-    scene.n_samples = int(np.size(x))
-    return scene.generate()
+    """Readings (ohms) for presses at the given points."""
+    return Rubber12Scene(effects=effects, progress=False, **kwargs).simulate(x, y, depth)
 
 
 def test_centre_press_gives_mirror_symmetric_channels():
