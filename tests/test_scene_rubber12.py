@@ -7,8 +7,13 @@ from data.contact import flat_punch_force_n
 from data.errors import InputError
 from data.rubber12 import Rubber12Scene
 
+from pathlib import Path
+
+from omegaconf import OmegaConf
+
 PHYSICS = {"contact": {}, "percolation": {}}
 NOISY = {**PHYSICS, "temperature_drift": {}, "adc": {}}
+LAB = OmegaConf.to_container(OmegaConf.load(Path(__file__).resolve().parents[1] / "configs/scene/rubber12.yaml").effects)
 
 
 def press(x, y, depth, effects=PHYSICS, **kwargs):
@@ -76,8 +81,8 @@ def test_same_seed_gives_identical_data_and_another_seed_differs():
     assert not a.equals(c)
 
 
-def test_repeated_presses_vary_like_the_lab_with_noise_effects():
-    table = Rubber12Scene(n_samples=450, effects=NOISY, progress=False).generate()
+def test_repeated_presses_vary_like_the_lab_with_lab_settings():
+    table = Rubber12Scene(n_samples=450, effects=LAB, progress=False).generate()
     frame = table.frame.assign(group=table.groups)
     spread = frame.groupby("group")[table.channel_columns].agg(lambda v: v.std() / v.mean())
     assert 0.0 < spread.to_numpy().max() < 0.023  # the lab's repeat CV was below 2.3 %
@@ -103,3 +108,45 @@ def test_bad_scene_settings_are_one_line_errors(kwargs, message):
     with pytest.raises(InputError, match=message) as error:
         Rubber12Scene(**{"effects": PHYSICS, "progress": False, **kwargs}).generate()
     assert "\n" not in str(error.value)
+
+
+def test_centre_press_is_symmetric_only_without_electrode_contact():
+    r = press(25.0, 25.0, 2.0, effects={**PHYSICS, "electrode_contact": {}}).channels[0]
+    side_pairs = r[[0, 1, 3, 4, 6, 7, 9, 10]]
+    assert np.ptp(side_pairs) / side_pairs.mean() > 1e-4  # the contacts' asymmetry breaks the mirror
+
+
+def test_temperature_drift_is_3_to_5_percent_per_10_degrees():
+    def reading(ambient):
+        effects = {**PHYSICS, "temperature_drift": {"ambient_c": ambient, "spread_c": 0.0}}
+        return press(20.0, 30.0, 1.5, effects=effects).channels[0]
+    change = reading(35.0) / reading(25.0) - 1.0
+    assert np.all((0.03 <= change) & (change <= 0.05))
+
+
+def test_hysteresis_separates_loading_from_unloading():
+    effects = {"contact": {}, "hysteresis": {"loss_fraction": 0.1}, "percolation": {}}
+    scene = Rubber12Scene(n_samples=19, sequence="up_down", effects=effects, progress=False)
+    frame = scene.generate().frame
+    up, down = frame.iloc[4], frame.iloc[14]          # the same depth step, on the way up and down
+    assert up["depth_mm"] == down["depth_mm"]
+    channels = [c for c in frame if c.startswith("r_")]
+    assert (down[channels] < up[channels]).all()   # more retained compression, more conductive
+    plain = Rubber12Scene(n_samples=19, sequence="up_down", effects=PHYSICS, progress=False).generate().frame
+    np.testing.assert_array_equal(plain.iloc[4][channels], plain.iloc[14][channels])
+
+
+def test_outlier_rejection_removes_adc_spikes():
+    clean = press(20.0, 30.0, 1.5, effects={**PHYSICS, "adc": {"noise_lsb": 0.0}}).channels[0]
+    spiky = {**PHYSICS, "adc": {"noise_lsb": 0.5, "spike_probability": 0.05, "spike_lsb": 300.0}}
+    raw = press([20.0] * 50, [30.0] * 50, [1.5] * 50, effects=spiky).channels
+    rejected = press([20.0] * 50, [30.0] * 50, [1.5] * 50, effects={**spiky, "outlier_rejection": {}}).channels
+    assert np.abs(rejected / clean - 1).mean() < 0.3 * np.abs(raw / clean - 1).mean()
+
+
+def test_minmax_normalize_makes_unitless_channels_in_unit_range():
+    table = Rubber12Scene(n_samples=90, effects={**PHYSICS, "minmax_normalize": {}}, progress=False).generate()
+    assert table.channel_columns[0] == "r_01_norm"
+    r = table.channels
+    np.testing.assert_allclose(r.min(axis=0), 0.0)
+    np.testing.assert_allclose(r.max(axis=0), 1.0)
