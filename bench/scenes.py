@@ -18,66 +18,75 @@ from omegaconf import OmegaConf
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-# (full scene, minimal scene): the minimal list is the least that still responds to a touch.
-SCENES = {"rubber12_lab": "rubber12_minimal", "fingertip": "fingertip_minimal"}
+# full scene -> (minimal scene, the key that sets its size, samples per unit of that key).
+# A rubber12 sample is one press; a fingertip sample is one recording (one pass, two channels
+# of ~2,100 steps), and its size key counts passes per force level over 18 boards x 6 levels.
+SCENES = {"rubber12_lab": ("rubber12_minimal", "n_samples", 1),
+          "fingertip": ("fingertip_minimal", "passes_per_level", 18 * 6)}
 
 
 def load(name: str, n_samples: int, effects=None):
     cfg = OmegaConf.load(ROOT / "configs" / "scene" / f"{name}.yaml")
+    size_key, per_unit = next((key, unit) for full, (minimal, key, unit) in SCENES.items() if name in (full, minimal))
     cfg.seed = 0
-    cfg.progress = False
-    cfg.n_samples = n_samples
+    cfg[size_key] = max(1, n_samples // per_unit)
+    if "progress" in cfg:
+        cfg.progress = False
     if effects is not None:
         cfg.effects = effects
     return cfg
 
 
 def seconds(cfg, repeats: int) -> float:
+    """Best wall time per generated sample over `repeats` runs."""
     best = float("inf")
     for _ in range(repeats):
         scene = instantiate(cfg)
         start = time.perf_counter()
-        scene.generate()
-        best = min(best, time.perf_counter() - start)
+        count = len(scene.generate().frame) if hasattr(scene, "simulate") else len(scene.generate())
+        best = min(best, (time.perf_counter() - start) / count)
     return best
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--n", type=int, default=4000, help="samples per timing")
+    parser.add_argument("--n", type=int, default=4000, help="samples per timing (fingertip: recordings, ~n/4)")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--scenes", nargs="*", default=[s for s in SCENES if (ROOT / f"configs/scene/{s}.yaml").exists()])
     args = parser.parse_args(argv)
 
     for full in args.scenes:
-        minimal = SCENES[full]
-        full_cfg = load(full, args.n)
-        minimal_cfg = load(minimal, args.n)
+        minimal, _, _ = SCENES[full]
+        n = args.n if full.startswith("rubber12") else args.n // 4
+        full_cfg, minimal_cfg = load(full, n), load(minimal, n)
         seconds(load(full, 10), 1)  # warm-up: solver factorisations are cached per process
         t_full, t_min = seconds(full_cfg, args.repeats), seconds(minimal_cfg, args.repeats)
-        print(f"\n## {full} ({args.n} samples, best of {args.repeats})\n")
+        print(f"\n## {full} (~{n} samples, best of {args.repeats})\n")
         print("| effect list | effects | samples/s |\n|---|---|---|")
-        print(f"| full | {', '.join(full_cfg.effects)} | {args.n / t_full:,.0f} |")
-        print(f"| minimal | {', '.join(minimal_cfg.effects) or 'none'} | {args.n / t_min:,.0f} |")
+        print(f"| full | {', '.join(full_cfg.effects)} | {1 / t_full:,.0f} |")
+        print(f"| minimal | {', '.join(minimal_cfg.effects) or 'none'} | {1 / t_min:,.0f} |")
 
         print("\n| effect added (in order) | ms per 1000 samples |\n|---|---|")
         listed = OmegaConf.to_container(full_cfg.effects)
         base = {k: v for k, v in listed.items() if k in minimal_cfg.effects}
-        previous = seconds(load(full, args.n, base), args.repeats)
-        print(f"| (minimal: {', '.join(base) or 'none'}) | {1e6 * previous / args.n:.2f} |")
+        previous = seconds(load(full, n, base), args.repeats)
+        print(f"| (minimal: {', '.join(base) or 'none'}) | {1e6 * previous:.2f} |")
         current = dict(base)
         for name, params in listed.items():
             if name in base:
                 continue
             current[name] = params
-            now = seconds(load(full, args.n, current), args.repeats)
-            print(f"| + {name} | {1e6 * (now - previous) / args.n:+.2f} |")
+            now = seconds(load(full, n, current), args.repeats)
+            print(f"| + {name} | {1e6 * (now - previous):+.2f} |")
             previous = now
 
         print("\n| samples | seconds | samples/s |\n|---|---|---|")
-        for n in (args.n // 2, args.n, 2 * args.n):
-            t = seconds(load(full, n), args.repeats)
-            print(f"| {n} | {t:.3f} | {n / t:,.0f} |")
+        for size in (n // 2, n, 2 * n):
+            cfg = load(full, size)
+            per_sample = seconds(cfg, args.repeats)
+            count = len(instantiate(cfg).generate().frame) if full.startswith("rubber12") else \
+                len(instantiate(cfg).generate())
+            print(f"| {count} | {count * per_sample:.3f} | {1 / per_sample:,.0f} |")
 
 
 if __name__ == "__main__":
