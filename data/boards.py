@@ -1,8 +1,9 @@
 """The fingertip scene's boards: textures, materials and the seed paper's board sets.
 
 Textures: `flat`, and ridges of three profiles (circular, triangular, trapezoidal) with
-periods 4, 5, 6 and 7 mm: 13 in all. Each ridge fills half its period. The profile c(u) is
-the share of the fingertip's width a ridge top touches at phase u = x / period (0..1).
+periods 4, 5, 6 and 7 mm: 13 in all. Circular and trapezoidal ridges fill half their period;
+triangular ridges meet (V-grooves). The profile c(u) is the share of the fingertip's width a
+ridge touches at phase u = x / period (0..1).
 
 Materials and their triboelectric surface-charge density against the fingertip's Kapton
 layer, in uC/m^2 (physics notes: 10-100+ uC/m^2). The ordering follows the triboelectric
@@ -47,12 +48,12 @@ def parse_texture(texture: str) -> tuple[str, float | None]:
 
 
 def ridge_profile(profile: str, phase) -> np.ndarray:
-    """Contact share c(u) of one ridge period at phase u in [0, 1); the ridge spans u in [0.25, 0.75]."""
+    """Contact share c(u) of one ridge period at phase u in [0, 1), the ridge centred on u = 0.5."""
     offset = np.abs(np.mod(phase, 1.0) - 0.5)
     if profile == "circular":      # a rounded ridge: a quarter-cosine on each flank
         return np.where(offset < 0.25, np.cos(2.0 * np.pi * offset), 0.0)
-    if profile == "triangular":
-        return np.clip(1.0 - offset / 0.25, 0.0, 1.0)
+    if profile == "triangular":    # V-grooves: ridges meet, the profile is a triangle wave
+        return 1.0 - offset / 0.5
     if profile == "trapezoidal":   # flat top over 40 % of the ridge, linear flanks
         return np.clip((0.25 - offset) / 0.15, 0.0, 1.0)
     raise InputError(f"unknown ridge profile '{profile}'; valid: {', '.join(PROFILES)}")
