@@ -13,7 +13,8 @@ from sklearn.preprocessing import StandardScaler
 
 from data.features import compute_features, feature_names
 from data.splits import fold_indices, holdout
-from data.table import TableSource
+from data.errors import InputError
+from data.table import SensorTable, TableSource
 
 
 class RegressionDataModule:
@@ -29,6 +30,10 @@ class RegressionDataModule:
 
     def setup(self) -> "RegressionDataModule":
         table = self.source.load()
+        if not isinstance(table, SensorTable):
+            name = getattr(self.source, "name", type(self.source).__name__)
+            raise InputError(f"scene {name} produces time-series recordings, not one row per press; "
+                             "the regression datamodule needs a tabular scene such as rubber12")
         self.table = table
         self.channel_names = list(table.channel_columns)
         self.target_names = list(table.target_columns)
