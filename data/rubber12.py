@@ -9,9 +9,11 @@ Protocol: `lab` cycles through nine press points P1-P9 (a 3 x 3 grid, row by row
 top-left) and `n_depth_steps` depths from 0.3 to 3.0 mm (5-50 % of the gel), repeating the
 position-depth pairs until `n_samples` presses; at each point the depths go up
 (`sequence: up`) or up and back down (`up_down`, where hysteresis shows); every press is
-press-hold-retract. `random` draws positions and depths uniformly. Each channel is the two-terminal resistance between an electrode pair from a real
-solve of the sheet's current flow (data/conduction.py); the default pattern measures each
-electrode against its clockwise neighbour, giving channels r_01_ohm ... r_12_ohm.
+press-hold-retract. `random` draws positions and depths uniformly.
+
+Each channel is the two-terminal resistance between an electrode pair from a real solve of
+the sheet's current flow (data/conduction.py); the default pattern measures each electrode
+against its clockwise neighbour, giving channels r_01_ohm ... r_12_ohm.
 
 Physics comes only from the listed effects (data/rubber12_effects.py).
 """
