@@ -2,8 +2,9 @@
 
     source (a scene or a user's table) -> SensorTable -> physics features -> splits -> scaling
 
-A held-out test split (15 % by default) is never touched in training or selection; a
-validation split comes out of the rest; fold indices for K-fold cover the training split.
+A held-out test split (15 % by default) is never touched in training or selection; an
+optional calibration split (for conformal intervals) and a validation split come out of the
+rest; fold indices for K-fold cover the training split.
 Features are standardised with statistics from the training split only. Targets stay in
 physical units here: a net standardises its own targets inside `fit` and reports back in
 units, so every model sees and returns the same arrays.
@@ -19,12 +20,13 @@ from data.table import SensorTable, TableSource
 
 class RegressionDataModule:
     def __init__(self, source, features, split="random", test_fraction=0.15, val_fraction=0.15,
-                 n_folds=5, seed=0):
+                 calibration_fraction=0.0, n_folds=5, seed=0):
         self.source = source
         self.features = features
         self.split = split
         self.test_fraction = test_fraction
         self.val_fraction = val_fraction
+        self.calibration_fraction = calibration_fraction
         self.n_folds = n_folds
         self.seed = seed
 
@@ -38,19 +40,26 @@ class RegressionDataModule:
         self.channel_names = list(table.channel_columns)
         self.target_names = list(table.target_columns)
         self.feature_names = feature_names(self.channel_names, self.features)
-        features = compute_features(table.channels, self.features)
-        targets = table.targets
+        self.y = table.targets
 
-        everything = np.arange(len(targets))
+        everything = np.arange(len(self.y))
         rest, self.test_idx = holdout(everything, table.groups, self.test_fraction, self.split, self.seed)
-        # Validation is a fraction of the whole set, taken from what the test split left.
-        val_share = self.val_fraction / (1.0 - self.test_fraction)
-        self.train_idx, self.val_idx = holdout(rest, table.groups, val_share, self.split, self.seed + 1)
-
-        self.scaler = StandardScaler().fit(features[self.train_idx])
-        self.X = self.scaler.transform(features)
-        self.y = targets
+        # Calibration and validation are fractions of the whole set, taken from what is left.
+        left = 1.0 - self.test_fraction
+        self.cal_idx = np.array([], dtype=np.int64)
+        if self.calibration_fraction > 0:
+            rest, self.cal_idx = holdout(rest, table.groups, self.calibration_fraction / left, self.split, self.seed + 2)
+            left -= self.calibration_fraction
+        self.train_idx, self.val_idx = holdout(rest, table.groups, self.val_fraction / left, self.split, self.seed + 1)
+        self.X, self.scaler = self.features_for(self.features)
         return self
+
+    def features_for(self, groups):
+        """Scaled features of every row for a choice of feature groups (used by the ablation):
+        the scaler is fitted on the training rows only."""
+        features = compute_features(self.table.channels, groups)
+        scaler = StandardScaler().fit(features[self.train_idx])
+        return scaler.transform(features), scaler
 
     def _part(self, idx):
         return self.X[idx], self.y[idx]
@@ -67,13 +76,18 @@ class RegressionDataModule:
     def test(self):
         return self._part(self.test_idx)
 
+    @property
+    def calibration(self):
+        """The calibration split, or the validation split when none was asked for."""
+        return self._part(self.cal_idx if self.cal_idx.size else self.val_idx)
+
     def folds(self, n_folds: int | None = None):
         """K-fold (fit, held) index pairs over the training split, grouped when the split is."""
         return fold_indices(self.train_idx, self.table.groups, n_folds or self.n_folds, self.split, self.seed)
 
     def summary(self) -> dict:
         return {"split": self.split, "n_train": int(self.train_idx.size), "n_val": int(self.val_idx.size),
-                "n_test": int(self.test_idx.size), "n_features": len(self.feature_names),
+                "n_calibration": int(self.cal_idx.size), "n_test": int(self.test_idx.size), "n_features": len(self.feature_names),
                 "channels": self.channel_names, "targets": self.target_names,
                 "source": self.table.description}
 

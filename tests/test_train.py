@@ -5,6 +5,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
@@ -25,7 +26,12 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
     cfg = compose_config(tiny(model))
     metrics = run(cfg, tmp_path)
 
-    for name in ("metrics.json", "predictions.csv", "parity.png"):
+    figures = {"parity", "residuals"}
+    if model in ("random_forest", "extra_trees", "decision_tree"):
+        figures |= {"importances", "correlation"}
+    if model == "blend":
+        figures |= {"importances", "correlation", "uncertainty", "identifiability"}
+    for name in ["metrics.json", "predictions.csv"] + [f"{f}.png" for f in figures]:
         assert (tmp_path / name).stat().st_size > 0, name
     assert not list(tmp_path.glob(".*.tmp*")) and not list(tmp_path.glob(".metrics*"))  # no leftovers
     saved = json.loads((tmp_path / "metrics.json").read_text())
@@ -42,12 +48,22 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
     events = EventAccumulator(str(tmp_path / "tensorboard")).Reload()
     scalars = events.Tags()["scalars"]
     assert "test/x_mm/r2" in scalars and "cost/fit_time_s" in scalars
-    assert events.Tags()["images"] == ["parity/test"]
-    if model == "resmlp":
+    assert set(events.Tags()["images"]) == {f"{f}/test" for f in figures}
+    if model in ("resmlp", "blend"):
         losses = events.Scalars("loss/train")
         assert [e.step for e in losses] == list(range(1, len(losses) + 1)) and len(losses) >= 2
         assert len(events.Scalars("loss/val")) == len(losses) and "lr" in scalars
     assert list((tmp_path / "tensorboard" / "hparams").glob("events.out.tfevents.*"))
+    if model == "blend":
+        weights = saved["selection"]["weights"]
+        for target in ("x_mm", "depth_mm"):
+            assert sum(w[target] for w in weights.values()) == pytest.approx(1.0)
+        assert set(saved["uncertainty"]["coverage_calibrated"]) == {"x_mm", "y_mm", "depth_mm", "pressure_pa"}
+        assert {"lower95_x_mm", "upper95_x_mm"} <= set(predictions)
+        assert set(saved["ablation"]["delta_r2_without"]) == {"raw", "log1p", "sqrt", "zscore", "stats",
+                                                            "pair_products", "pair_ratios"}
+        assert np.isfinite(np.asarray(saved["identifiability"]["position_sigma_mm"], dtype=float)).any()
+        assert "uncertainty/coverage_calibrated/x_mm" in scalars
 
 
 def test_a_users_table_runs_like_a_scene(compose_config, tmp_path):

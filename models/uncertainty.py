@@ -1,0 +1,53 @@
+"""Prediction intervals that say how sure a model is, and a check that they mean it.
+
+A model with `predict_std(X) -> (mean, sigma_total)` gets intervals mean +/- z sigma. The raw
+interval assumes Gaussian, well-estimated errors; split-conformal calibration (Vovk et al.
+2005; Lei et al., JASA 113, 2018) makes it distribution-free: on held-out calibration data take
+the normalised scores |y - mean| / sigma and their ceil((n + 1)(1 - alpha)) / n empirical
+quantile q, per target; then mean +/- q sigma covers a new point with probability >= 1 - alpha
+(exchangeable data). Too few calibration rows for the quantile is a clear error.
+"""
+import numpy as np
+
+from data.errors import InputError
+
+Z_95 = 1.959963984540054
+
+
+def conformal_quantile(scores: np.ndarray, alpha: float = 0.05) -> np.ndarray:
+    """Per-column split-conformal quantile of (n, n_targets) non-negative scores."""
+    scores = np.asarray(scores, dtype=np.float64)
+    n = scores.shape[0]
+    rank = int(np.ceil((n + 1) * (1.0 - alpha)))
+    if rank > n:
+        raise InputError(f"conformal calibration at {100 * (1 - alpha):.0f} % needs at least "
+                         f"{int(np.ceil((1 - alpha) / alpha))} calibration rows, got {n}")
+    return np.sort(scores, axis=0)[rank - 1]
+
+
+def normalised_scores(y, mean, sigma) -> np.ndarray:
+    """|y - mean| / sigma, with sigma floored so a zero-spread prediction cannot divide by zero."""
+    sigma = np.maximum(np.asarray(sigma, dtype=np.float64), 1e-12 * (np.abs(mean).max() + 1.0))
+    return np.abs(np.asarray(y) - mean) / sigma
+
+
+def coverage(y, lower, upper) -> np.ndarray:
+    """Share of rows whose truth lies in [lower, upper], per target."""
+    y = np.asarray(y)
+    return ((y >= lower) & (y <= upper)).mean(axis=0)
+
+
+class IntervalMixin:
+    """Adds calibrate / predict_interval to an estimator that implements predict_std."""
+
+    def calibrate(self, X, y, alpha: float = 0.05):
+        mean, sigma = self.predict_std(X)
+        self.conformal_scale_ = conformal_quantile(normalised_scores(y, mean, sigma), alpha)
+        self.alpha_ = alpha
+        return self
+
+    def predict_interval(self, X, calibrated: bool = True):
+        """(mean, lower, upper): raw mean +/- 1.96 sigma, or the conformal mean +/- q sigma."""
+        mean, sigma = self.predict_std(X)
+        scale = self.conformal_scale_ if calibrated else Z_95
+        return mean, mean - scale * sigma, mean + scale * sigma
