@@ -64,7 +64,7 @@ def identifiability_map(xy_mm, depth_mm, sigma, error, targets, bins=5, extent_m
 
 def edge_vs_centre(xy_mm, values, side_mm=50.0, border_mm=12.5) -> dict:
     """Mean of `values` within `border_mm` of an edge vs in the middle of the sheet."""
-    near = (np.minimum(xy_mm, side_mm - xy_mm) < border_mm).any(axis=1)
+    near = (np.minimum(xy_mm, side_mm - xy_mm) <= border_mm).any(axis=1)
     return {"edge": float(values[near].mean()) if near.any() else float("nan"),
             "centre": float(values[~near].mean()) if (~near).any() else float("nan")}
 

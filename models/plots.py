@@ -48,7 +48,7 @@ def uncertainty_figure(y_true, mean, lower, upper, target_names):
                     fmt=".", ms=3, lw=0.6, alpha=0.6, color="tab:blue")
         low, high = y_true[:, k].min(), y_true[:, k].max()
         ax.plot([low, high], [low, high], color="0.5", lw=1)
-        ax.set(title=f"{name}: 95 % intervals ({100 * inside.mean():.0f} % cover)", xlabel="true", ylabel="predicted")
+        ax.set(title=f"{name}: {100 * inside.mean():.0f} % inside 95 % PI", xlabel="true", ylabel="predicted")
     fig.tight_layout()
     return fig
 

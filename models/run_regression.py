@@ -177,7 +177,8 @@ def run(cfg: DictConfig, output_dir: str | Path) -> dict:
 
     log.info("%s fitted in %.2f s\n%s", metrics["model"], fit_time_s, format_table(metrics))
     if "selection" in metrics:
-        log.info("validation weights (per target): %s", metrics["selection"]["weights"])
+        log.info("validation weights (per target): %s",
+                 {n: {t: round(w, 3) for t, w in row.items()} for n, row in metrics["selection"]["weights"].items()})
     if "uncertainty" in metrics:
         u = metrics["uncertainty"]
         log.info("95 %% interval coverage on test, raw -> calibrated: %s",
