@@ -1,6 +1,6 @@
 """Train and evaluate one Touchstone model: `python train.py model=resmlp scene.n_samples=2000 seed=3`.
 
-Thin on purpose: Hydra composes the config, models/run_regression.py does the work, and a
+Thin on purpose: Hydra composes the config, models/run.py does the work, and a
 user-input problem ends in one line on stderr and exit code 2 instead of a traceback.
 """
 import sys
@@ -10,7 +10,7 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
 from data.errors import InputError
-from models.run_regression import run
+from models.run import run
 
 
 @hydra.main(version_base="1.3", config_path="configs", config_name="config")
@@ -20,7 +20,8 @@ def main(cfg: DictConfig) -> float:
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
         sys.exit(2)
-    return metrics["val"]["average"]["r2"]  # the value a Hydra sweeper would optimise
+    val = metrics["val"]  # the value a Hydra sweeper would optimise
+    return val["average"]["r2"] if "average" in val else val["accuracy"]
 
 
 if __name__ == "__main__":

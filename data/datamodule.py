@@ -35,7 +35,7 @@ class RegressionDataModule:
         if not isinstance(table, SensorTable):
             name = getattr(self.source, "name", type(self.source).__name__)
             raise InputError(f"scene {name} produces time-series recordings, not one row per press; "
-                             "the regression datamodule needs a tabular scene such as rubber12")
+                             "use data=timeseries (or experiment=materials10, textures13, combined18)")
         self.table = table
         self.channel_names = list(table.channel_columns)
         self.target_names = list(table.target_columns)

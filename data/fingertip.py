@@ -178,3 +178,19 @@ class FingertipScene:
 
     def load(self) -> RecordingSet:
         return self.generate()
+
+
+def fsr_force_n(volts, supply_v=3.3, divider_resistor_ohm=1.0e4, fsr_resistance_1n_ohm=1.0e4, fsr_exponent=0.9,
+                fsr_saturation_n=22.0):
+    """Invert the FSR divider: volts -> newtons, the calibration a user does with a load cell.
+
+    R = R_m (V_s - V) / V, F_eff = (R_1N / R)^(1/n), then undo the soft saturation
+    F_eff = F / (1 + (F / F_sat)^4)^(1/4), i.e. F = F_eff / (1 - (F_eff / F_sat)^4)^(1/4).
+    Readings at or beyond saturation are capped at 3 F_sat; 0 V reads 0 N.
+    """
+    v = np.clip(np.asarray(volts, dtype=np.float64), 0.0, supply_v * (1 - 1e-9))
+    resistance = divider_resistor_ohm * (supply_v - v) / np.maximum(v, 1e-12)
+    effective = (fsr_resistance_1n_ohm / resistance) ** (1.0 / fsr_exponent)
+    ratio = np.minimum(effective / fsr_saturation_n, (1 - 1e-6))
+    force = np.minimum(effective / (1.0 - ratio**4) ** 0.25, 3 * fsr_saturation_n)
+    return np.where(v > 0, force, 0.0)

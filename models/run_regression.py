@@ -1,17 +1,14 @@
-"""One regression run, end to end: datamodule -> model -> metrics -> analysis -> TensorBoard -> files.
+"""One regression run: datamodule -> model -> metrics -> analysis -> TensorBoard -> files.
 
-train.py calls `run(cfg, output_dir)`; tests call it too with a composed config and a
-tmp_path. Every artefact goes under `output_dir` and is written atomically.
+Every artefact goes under `output_dir` and is written atomically.
 """
 import inspect
 import logging
-import random
 import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import torch
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
@@ -22,12 +19,6 @@ from models.analysis import (edge_vs_centre, feature_ablation, format_ablation, 
 from models.metrics import format_table, regression_metrics
 
 log = logging.getLogger(__name__)
-
-
-def seed_everything(seed: int) -> None:
-    random.seed(seed)
-    np.random.seed(seed)
-    torch.manual_seed(seed)
 
 
 def _hparams(cfg: DictConfig) -> dict:
@@ -87,12 +78,9 @@ def _ablation_estimator(model, cfg):
     return type(model).__name__, instantiate(cfg.model)
 
 
-def run(cfg: DictConfig, output_dir: str | Path) -> dict:
+def run_regression(cfg: DictConfig, output_dir: str | Path, datamodule) -> dict:
     output_dir = Path(output_dir)
-    seed_everything(cfg.seed)
     analysis = cfg.get("analysis", {})
-
-    datamodule = instantiate(cfg.data).setup()
     (X_val, y_val), (X_test, y_test) = datamodule.val, datamodule.test
     targets = datamodule.target_names
     log.info("data: %s", {k: v for k, v in datamodule.summary().items() if k != "source"})

@@ -23,10 +23,13 @@ class TensorBoardLogger:
         self.writer_.close()
 
     def log_epoch(self, record: dict) -> None:
+        """Every number of an epoch record: train_loss -> loss/train, val_accuracy -> accuracy/val, lr -> lr."""
         step = record["epoch"]
-        self.writer_.add_scalar("loss/train", record["train_loss"], step)
-        self.writer_.add_scalar("loss/val", record["val_loss"], step)
-        self.writer_.add_scalar("lr", record["lr"], step)
+        for key, value in record.items():
+            if key == "epoch":
+                continue
+            split, _, metric = key.partition("_")
+            self.writer_.add_scalar(f"{metric}/{split}" if split in ("train", "val") else key, value, step)
 
     def log_metrics(self, metrics: dict, prefix: str) -> None:
         for target, row in metrics.items():

@@ -1,0 +1,169 @@
+"""The time-series datamodule: recordings -> calibrated channels -> windows -> splits -> scaling.
+
+Serves the surface-recognition models (PR-CNN and its baselines) the way the seed paper
+trains them:
+- recordings come from a scene (fingertip) or a user's NPZ / long table;
+- `force_calibration` turns the piezoresistive divider voltage into newtons (Algorithm 1
+  compares the channel's maximum with force levels in newtons);
+- recordings are decimated, trimmed and cut into windows (data/windows.py);
+- `split=force_level` trains on the recorded levels (paper: 1, 10, 15, 25 N) and validates on
+  levels never used in training (5, 20 N); `split=stratified` holds out a stratified share of
+  recordings. Windows of one recording always stay on one side;
+- `modalities` name groups of channels (names or indices), e.g. triboelectric: [0];
+  any number of groups and channels per group, so an IMU's accelerometer + gyroscope fit too;
+- `augment` with `enabled: true` adds virtual force-level windows (Algorithm 1) to training;
+- channels are standardised with statistics of the real training windows.
+"""
+import numpy as np
+from sklearn.model_selection import StratifiedShuffleSplit
+
+from data.errors import InputError
+from data.fingertip import fsr_force_n
+from data.recordings import RecordingSet
+from data.virtual_force_levels import virtual_force_levels
+from data.windows import cut_windows, decimate
+
+
+class TimeSeriesDataModule:
+    task = "classification"
+
+    def __init__(self, source, label="material", modalities=None, decimate=10, window_length=140,
+                 window_step=20, trim_start=3, trim_end=3, min_variance=0.0, variance_channel=0,
+                 split="force_level", train_levels=(1, 10, 15, 25), val_levels=(5, 20), val_fraction=0.2,
+                 force_calibration=None, augment=None, seed=0):
+        self.source = source
+        self.label = label
+        self.modalities = modalities
+        self.decimate = decimate
+        self.window_length = window_length
+        self.window_step = window_step
+        self.trim_start = trim_start
+        self.trim_end = trim_end
+        self.min_variance = min_variance
+        self.variance_channel = variance_channel
+        self.split = split
+        self.train_levels = train_levels
+        self.val_levels = val_levels
+        self.val_fraction = val_fraction
+        self.force_calibration = force_calibration
+        self.augment = augment
+        self.seed = seed
+
+    # -- steps ------------------------------------------------------------------------------
+    def _load(self) -> RecordingSet:
+        recordings = self.source.load()
+        if not isinstance(recordings, RecordingSet):
+            raise InputError("data=timeseries needs a scene or file of time-series recordings (e.g. scene=fingertip)")
+        if self.label not in recordings.labels:
+            raise InputError(f"data.label '{self.label}' is not a label of these recordings; "
+                             f"available: {', '.join(recordings.labels.columns)}")
+        if self.force_calibration:
+            calibration = dict(self.force_calibration)
+            channel = calibration.pop("channel")
+            if channel not in recordings.channel_names:
+                raise InputError(f"data.force_calibration.channel '{channel}' is not a channel; "
+                                 f"available: {', '.join(recordings.channel_names)}")
+            k = recordings.channel_names.index(channel)
+            recordings.signals[:, k] = fsr_force_n(recordings.signals[:, k], **calibration)
+            recordings.channel_names[k] = calibration.get("renamed", channel.rsplit("_", 1)[0] + "_n")
+        return recordings
+
+    def _channel_index(self, channel, names) -> int:
+        if isinstance(channel, int) or str(channel).isdigit():
+            index = int(channel)
+            if not 0 <= index < len(names):
+                raise InputError(f"channel index {index} out of range for {len(names)} channels")
+            return index
+        if channel not in names:
+            raise InputError(f"unknown channel '{channel}'; available: {', '.join(names)}")
+        return names.index(channel)
+
+    def _split_recordings(self, labels):
+        if self.split == "force_level":
+            if "force_level_n" not in labels:
+                raise InputError("data.split=force_level needs a force level per recording")
+            levels = labels["force_level_n"].to_numpy()
+            train, val = set(map(float, self.train_levels)), set(map(float, self.val_levels))
+            if train & val:
+                raise InputError(f"data.train_levels and data.val_levels share {sorted(train & val)}")
+            missing = (train | val) - set(levels.tolist())
+            if missing:
+                raise InputError(f"force level(s) {sorted(missing)} N were not recorded; recorded: "
+                                 f"{sorted(set(levels.tolist()))}")
+            return np.flatnonzero(np.isin(levels, list(train))), np.flatnonzero(np.isin(levels, list(val)))
+        if self.split == "stratified":
+            splitter = StratifiedShuffleSplit(n_splits=1, test_size=self.val_fraction, random_state=self.seed)
+            try:
+                return next(splitter.split(np.zeros(len(labels)), labels[self.label].astype(str)))
+            except ValueError as error:  # too few recordings per class for the requested share
+                raise InputError(f"data.split=stratified: {error}") from None
+        raise InputError(f"data.split must be force_level or stratified, got '{self.split}'")
+
+    def setup(self) -> "TimeSeriesDataModule":
+        recordings = self._load()
+        names = list(recordings.channel_names)
+        signals = decimate(recordings.signals, int(self.decimate))
+        self.sample_rate_hz = recordings.sample_rate_hz / int(self.decimate)
+        labels = recordings.labels
+        self.classes = sorted(labels[self.label].astype(str).unique())
+        codes = labels[self.label].astype(str).map({c: i for i, c in enumerate(self.classes)}).to_numpy()
+        train_rec, val_rec = self._split_recordings(labels)
+        self.train_recordings, self.val_recordings = train_rec, val_rec
+
+        def windows_of(rows):
+            X, owner = cut_windows(signals[rows], self.window_length, self.window_step, self.trim_start,
+                                   self.trim_end, self.min_variance, self.variance_channel)
+            levels = labels["force_level_n"].to_numpy()[rows][owner] if "force_level_n" in labels else None
+            return X, codes[rows][owner], levels, rows[owner]
+
+        X_train, y_train, levels_train, self.train_window_recording = windows_of(train_rec)
+        X_val, y_val, self.val_levels_per_window, self.val_window_recording = windows_of(val_rec)
+        self.augment_report = None
+        if self.augment and self.augment.get("enabled", False):
+            if levels_train is None:
+                raise InputError("augment=virtual_force_levels needs a force level per recording")
+            te = self._channel_index(self.augment["triboelectric_channel"], names)
+            pr = self._channel_index(self.augment["piezoresistive_channel"], names)
+            virtual, virtual_y, virtual_levels, report = virtual_force_levels(
+                X_train, y_train, levels_train, self.augment["target_levels"], te=te, pr=pr)
+            self.augment_report = report
+            self.n_virtual_windows = len(virtual)
+            X_real = X_train
+            X_train = np.concatenate([X_train, virtual])
+            y_train = np.concatenate([y_train, virtual_y])
+        else:
+            X_real = X_train
+            self.n_virtual_windows = 0
+
+        # Standardise each channel with the real training windows' statistics.
+        self.channel_mean = X_real.mean(axis=(0, 2), keepdims=True)
+        self.channel_std = np.where(X_real.std(axis=(0, 2), keepdims=True) > 0, X_real.std(axis=(0, 2), keepdims=True), 1.0)
+        self.X_train = ((X_train - self.channel_mean) / self.channel_std).astype(np.float32)
+        self.X_val = ((X_val - self.channel_mean) / self.channel_std).astype(np.float32)
+        self.y_train, self.y_val = y_train.astype(np.int64), y_val.astype(np.int64)
+        self.channel_names = names
+        groups = self.modalities or {name: [name] for name in names}
+        self.modality_channels = {g: [self._channel_index(c, names) for c in chs] for g, chs in groups.items()}
+        used = [c for chs in self.modality_channels.values() for c in chs]
+        if len(set(used)) != len(used):
+            raise InputError(f"data.modalities list a channel twice: {dict(groups)}")
+        self.recordings = recordings
+        return self
+
+    @property
+    def train(self):
+        return self.X_train, self.y_train
+
+    @property
+    def val(self):
+        return self.X_val, self.y_val
+
+    def summary(self) -> dict:
+        return {"task": self.task, "label": self.label, "classes": self.classes, "split": self.split,
+                "train_levels": list(self.train_levels) if self.split == "force_level" else None,
+                "val_levels": list(self.val_levels) if self.split == "force_level" else None,
+                "n_train_windows": int(len(self.y_train)), "n_virtual_windows": int(self.n_virtual_windows),
+                "n_val_windows": int(len(self.y_val)), "window": [int(self.X_train.shape[1]), int(self.X_train.shape[2])],
+                "sample_rate_hz": self.sample_rate_hz, "channels": self.channel_names,
+                "modalities": self.modality_channels, "augment": self.augment_report,
+                "source": self.recordings.description}
