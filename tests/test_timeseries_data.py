@@ -1,0 +1,139 @@
+"""Windows, force-level splits, users' recordings and Algorithm 1 (virtual force levels)."""
+import numpy as np
+import pandas as pd
+import pytest
+
+from data.errors import InputError
+from data.fingertip import FingertipScene, fsr_force_n
+from data.recording_files import load_long_table, load_npz
+from data.timeseries_datamodule import TimeSeriesDataModule
+from data.virtual_force_levels import virtual_force_levels
+from data.windows import cut_windows, decimate
+
+
+def test_window_counts_trimming_and_variance_filter():
+    rng = np.random.default_rng(0)
+    recording = np.zeros((1, 2, 100))
+    recording[0, 0, 50:] = rng.standard_normal(50)       # flat first half, noisy second half
+    windows, owner = cut_windows(recording, length=20, step=10, trim_start=5, trim_end=5)
+    assert windows.shape == (8, 2, 20) and (owner == 0).all()   # (90 - 20) / 10 + 1
+    np.testing.assert_array_equal(windows[1, 0], recording[0, 0, 15:35])
+    kept, _ = cut_windows(recording, length=20, step=10, trim_start=5, trim_end=5, min_variance=0.1)
+    assert len(kept) == 4  # windows starting at 45 or later see the noise; 35 has only 5 noisy steps of 20
+    with pytest.raises(InputError, match="shorter than the window length"):
+        cut_windows(recording, length=95, step=1, trim_start=5, trim_end=5)
+
+
+def test_decimate_takes_block_means():
+    x = np.arange(10.0)[None, None]
+    np.testing.assert_array_equal(decimate(x, 3), [[[1.0, 4.0, 7.0]]])
+
+
+def small_scene(**kwargs):
+    return FingertipScene(**{"boards": ["glass/flat", "acrylic/flat", "resin/circular_5mm"], "passes_per_level": 2,
+                             "effects": {}, **kwargs})
+
+
+CALIBRATION = {"channel": "piezoresistive_v", "supply_v": 3.3, "divider_resistor_ohm": 1.0e4,
+               "fsr_resistance_1n_ohm": 1.0e4, "fsr_exponent": 0.9, "fsr_saturation_n": 22.0}
+
+
+def test_force_level_split_never_leaks_a_level():
+    dm = TimeSeriesDataModule(small_scene(), label="board", force_calibration=CALIBRATION).setup()
+    levels = dm.recordings.labels["force_level_n"].to_numpy()
+    assert set(levels[dm.train_window_recording]) == {1, 10, 15, 25}
+    assert set(levels[dm.val_window_recording]) == {5, 20}
+    assert not set(dm.train_window_recording) & set(dm.val_window_recording)
+    with pytest.raises(InputError, match="share"):
+        TimeSeriesDataModule(small_scene(), label="board", train_levels=[1, 5], val_levels=[5]).setup()
+    with pytest.raises(InputError, match="were not recorded"):
+        TimeSeriesDataModule(small_scene(), label="board", train_levels=[1, 2], val_levels=[5]).setup()
+
+
+def test_fsr_calibration_reads_the_force_level():
+    scene = small_scene(boards=["glass/flat"], force_levels_n=[1, 5, 25], passes_per_level=1)
+    recordings = scene.generate()
+    newtons = fsr_force_n(recordings.channel("piezoresistive_v"), fsr_saturation_n=22.0)
+    np.testing.assert_allclose(newtons.max(axis=1), [1, 5, 25], rtol=0.01)
+
+
+def test_modalities_accept_any_groups_of_channels():
+    dm = TimeSeriesDataModule(small_scene(), label="material",
+                              modalities={"charge": ["triboelectric_na"], "load": [1]}).setup()
+    assert dm.modality_channels == {"charge": [0], "load": [1]}
+    with pytest.raises(InputError, match="unknown channel 'gyro'"):
+        TimeSeriesDataModule(small_scene(), label="material", modalities={"imu": ["gyro"]}).setup()
+
+
+def test_users_npz_and_long_table_load_as_recordings(tmp_path):
+    X = np.random.default_rng(0).standard_normal((6, 3, 50)).astype(np.float32)
+    np.savez(tmp_path / "rig.npz", X=X, y=np.array(list("aabbcc")), force_level=np.array([1, 5, 1, 5, 1, 5.0]))
+    recordings = load_npz(tmp_path / "rig.npz", label="surface")
+    np.testing.assert_array_equal(recordings.signals, X)
+    assert list(recordings.labels["surface"]) == list("aabbcc")
+    rows = [{"rec": r, "t": t, "ax": X[r, 0, t], "ay": X[r, 1, t], "az": X[r, 2, t], "surface": "abc"[r // 2]}
+            for r in range(6) for t in range(50)]
+    pd.DataFrame(rows).sample(frac=1, random_state=0).to_csv(tmp_path / "long.csv", index=False)
+    table = load_long_table(tmp_path / "long.csv", "rec", "t", ["ax", "ay", "az"], ["surface"])
+    np.testing.assert_allclose(table.signals, X, rtol=1e-6)
+
+
+@pytest.mark.parametrize("arrays, message", [
+    ({"X": np.zeros((2, 3))}, "missing array 'y'"),
+    ({"X": np.zeros((2, 3)), "y": np.zeros(2)}, r"X must be \(n, channels, length\)"),
+    ({"X": np.zeros((2, 1, 5)), "y": np.zeros(3)}, "3 labels for 2 recordings"),
+    ({"X": np.full((2, 1, 5), np.nan), "y": np.zeros(2)}, "NaN or inf"),
+])
+def test_bad_npz_files_are_one_line_errors(tmp_path, arrays, message):
+    np.savez(tmp_path / "bad.npz", **arrays)
+    with pytest.raises(InputError, match=message):
+        load_npz(tmp_path / "bad.npz")
+
+
+def hand_built(levels=(1.0, 2.0, 4.0, 8.0), te_values=None):
+    """One window per level of class 0; TE is constant (so f1 = |TE|), PR peaks at the level."""
+    te_values = te_values if te_values is not None else [1 + 0.5 * d for d in levels]  # f1 = 1 + f3 / 2
+    windows = np.zeros((len(levels), 2, 5))
+    for k, (d, te) in enumerate(zip(levels, te_values)):
+        windows[k, 0] = te
+        windows[k, 1] = [0, d / 2, d, d / 2, 0]
+    return windows, np.zeros(len(levels), dtype=int), np.asarray(levels)
+
+
+def test_algorithm_1_gives_the_exact_scaled_windows():
+    windows, labels, levels = hand_built()
+    virtual, virtual_labels, virtual_levels, report = virtual_force_levels(windows, labels, levels, [3.0])
+    # neighbours of 3 N are 2 N and 4 N; F(3) = 1 + 3/2 = 2.5 exactly (the cubic fit of a line)
+    assert report["targets"][3.0]["neighbours"] == [2.0, 4.0]
+    expected = windows[[1, 2]].copy()
+    expected[:, 0] *= (2.5 / np.array([2.0, 3.0]))[:, None]
+    expected[:, 1] *= (3.0 / np.array([2.0, 4.0]))[:, None]
+    np.testing.assert_allclose(virtual, expected, rtol=1e-10)
+    assert virtual_levels.tolist() == [3.0, 3.0] and virtual_labels.tolist() == [0, 0]
+    assert virtual[:, 1].max(axis=1).tolist() == pytest.approx([3.0, 3.0])
+
+
+def test_algorithm_1_degenerate_cases_are_defined():
+    windows, labels, levels = hand_built()
+    with pytest.raises(InputError, match="outside the recorded levels"):
+        virtual_force_levels(windows, labels, levels, [9.0])
+    with pytest.raises(InputError, match="outside the recorded levels"):
+        virtual_force_levels(windows, labels, levels, [1.0])  # no recorded level below 1 N
+    # two distinct f3 values: the fit drops to a line instead of a singular cubic
+    two, two_labels, two_levels = hand_built(levels=(2.0, 4.0))
+    virtual, *_ = virtual_force_levels(two, two_labels, two_levels, [3.0])
+    assert np.isfinite(virtual).all() and len(virtual) == 2
+    # identical f3 everywhere: no curve can be fitted
+    same, same_labels, _ = hand_built(levels=(4.0, 4.0))
+    with pytest.raises(InputError, match="same f3"):
+        virtual_force_levels(same, same_labels, np.array([2.0, 6.0]), [3.0])
+    # f1 = 0 and f3 = 0 windows are skipped and counted, never turned into NaN
+    zero, zero_labels, zero_levels = hand_built(te_values=[0.0, 2.0, 3.0, 5.0])
+    zero[3, 1] = 0.0
+    virtual, _, _, report = virtual_force_levels(zero, zero_labels, zero_levels, [3.0])
+    assert report["skipped_windows_zero_f1_or_f3"] == 2 and np.isfinite(virtual).all()
+    # a cubic that dips to F(target) <= 0 (here F(3) = -0.19) skips the class instead of making
+    # negative scales
+    dipping, dipping_labels, dipping_levels = hand_built(te_values=[1.0, 0.05, 0.05, 1.0])
+    virtual, _, _, report = virtual_force_levels(dipping, dipping_labels, dipping_levels, [3.0])
+    assert len(virtual) == 0 and report["targets"][3.0]["skipped_classes"] == ["0"]
