@@ -59,6 +59,7 @@ def load_npz(path, label="y", sample_rate_hz=250.0) -> RecordingSet:
 
 def load_long_table(path, recording_column, time_column, channel_columns, label_columns,
                     force_column=None, sample_rate_hz=250.0) -> RecordingSet:
+    """One recording per id, channels in the given order, labels from its first row."""
     frame = read_table_file(path)
     check_numeric_columns(frame, [time_column] + list(channel_columns), "channel/time", str(path))
     needed = [recording_column] + list(label_columns) + ([force_column] if force_column else [])
@@ -71,7 +72,31 @@ def load_long_table(path, recording_column, time_column, channel_columns, label_
         first = part.iloc[0]
         row = {c: first[c] for c in label_columns}
         if force_column:
-            row["force_level_n"] = float(first[force_column])
+            row["force_level_n"] = float(first[force_column])  # the data module splits on this name
         rows.append(row)
     return RecordingSet(_stack(arrays, path), list(channel_columns), pd.DataFrame(rows), sample_rate_hz,
                         {"source": "table", "path": str(path)})
+
+
+class NpzRecordings:
+    """`data=recordings_npz data.source.path=rig.npz`: a user's NPZ as a recordings source."""
+
+    def __init__(self, path, label="y", sample_rate_hz=250.0):
+        self.path, self.label, self.sample_rate_hz = path, label, sample_rate_hz
+
+    def load(self) -> RecordingSet:
+        return load_npz(self.path, self.label, self.sample_rate_hz)
+
+
+class LongTableRecordings:
+    """`data=recordings_table data.source.path=rig.parquet`: a user's long table as a recordings source."""
+
+    def __init__(self, path, recording_column, time_column, channel_columns, label_columns,
+                 force_column=None, sample_rate_hz=250.0):
+        self.path, self.recording_column, self.time_column = path, recording_column, time_column
+        self.channel_columns, self.label_columns = list(channel_columns), list(label_columns)
+        self.force_column, self.sample_rate_hz = force_column, sample_rate_hz
+
+    def load(self) -> RecordingSet:
+        return load_long_table(self.path, self.recording_column, self.time_column, self.channel_columns,
+                               self.label_columns, self.force_column, self.sample_rate_hz)

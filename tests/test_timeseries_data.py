@@ -137,3 +137,19 @@ def test_algorithm_1_degenerate_cases_are_defined():
     dipping, dipping_labels, dipping_levels = hand_built(te_values=[1.0, 0.05, 0.05, 1.0])
     virtual, _, _, report = virtual_force_levels(dipping, dipping_labels, dipping_levels, [3.0])
     assert len(virtual) == 0 and report["targets"][3.0]["skipped_classes"] == ["0"]
+
+
+def test_users_npz_trains_through_hydra(compose_config, tmp_path):
+    from models.run import run
+    rng = np.random.default_rng(0)
+    t = np.arange(200) / 50.0
+    X = np.stack([np.stack([np.sin(2 * np.pi * f * t) + 0.3 * rng.standard_normal(200),
+                            rng.standard_normal(200)]) for f in np.repeat([1.0, 3.0, 6.0], 20)])
+    np.savez(tmp_path / "rig.npz", X=X, y=np.repeat(["slow", "mid", "fast"], 20))
+    cfg = compose_config(["experiment=materials10", "data=recordings_npz", f"data.source.path={tmp_path / 'rig.npz'}",
+                          "data.label=y", "data.window_length=100", "data.window_step=50", "data.trim_start=0",
+                          "data.trim_end=0", "trainer.max_epochs=8", "trainer.lr_milestones=[6]",
+                          "trainer.progress=false", "trainer.device=cpu"])
+    metrics = run(cfg, tmp_path / "run")
+    assert metrics["data"]["classes"] == ["fast", "mid", "slow"]
+    assert metrics["val"]["accuracy"] > 0.6  # chance is 1/3
