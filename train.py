@@ -1,7 +1,8 @@
 """Train and evaluate one Touchstone model: `python train.py model=resmlp scene.n_samples=2000 seed=3`.
 
-Thin on purpose: Hydra composes the config, models/run.py does the work, and a
-user-input problem ends in one line on stderr and exit code 2 instead of a traceback.
+Thin on purpose: Hydra composes the config, models/run.py does the work, export/ writes the
+ONNX file, and a user-input problem ends in one line on stderr and exit code 2 instead of a
+traceback.
 """
 import sys
 
@@ -10,13 +11,17 @@ from hydra.core.hydra_config import HydraConfig
 from omegaconf import DictConfig
 
 from data.errors import InputError
+from export.run_export import export_run
 from models.run import run
 
 
 @hydra.main(version_base="1.3", config_path="configs", config_name="config")
 def main(cfg: DictConfig) -> float:
+    output_dir = HydraConfig.get().runtime.output_dir
     try:
-        metrics = run(cfg, HydraConfig.get().runtime.output_dir)
+        metrics = run(cfg, output_dir)
+        if cfg.export.enabled:
+            export_run(output_dir, cfg.export.opset, cfg.export.file)
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
         sys.exit(2)

@@ -16,6 +16,7 @@ from sklearn.metrics import confusion_matrix, f1_score, log_loss
 
 from data.atomic import atomic_write, atomic_write_json
 from models import plots
+from models.deployable import save_pipeline, timeseries_pipeline
 
 log = logging.getLogger(__name__)
 
@@ -71,6 +72,7 @@ def run_classification(cfg, output_dir, datamodule) -> dict:
     atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
     atomic_write(output_dir / "confusion.png", lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
     plots.plt.close(figure)
+    save_pipeline(timeseries_pipeline(datamodule, model), output_dir / "pipeline.pkl")
     atomic_write_json(output_dir / "metrics.json", metrics)
     val = metrics["val"]
     log.info("%s (%d parameters) fitted in %.1f s: validation accuracy %.4f, macro-F1 %.4f, loss %.4f, by level %s",

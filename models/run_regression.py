@@ -14,6 +14,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from data.atomic import atomic_write, atomic_write_json
 from models import plots
+from models.deployable import regression_pipeline, save_pipeline
 from models.analysis import (edge_vs_centre, feature_ablation, format_ablation, identifiability_map,
                              interval_report)
 from models.metrics import format_table, regression_metrics
@@ -161,6 +162,7 @@ def run_regression(cfg: DictConfig, output_dir: str | Path, datamodule) -> dict:
     for name, figure in figures.items():
         atomic_write(output_dir / f"{name}.png", lambda tmp, f=figure: f.savefig(tmp, dpi=110, format="png"))
         plots.plt.close(figure)
+    save_pipeline(regression_pipeline(datamodule, model), output_dir / "pipeline.pkl")
     atomic_write_json(output_dir / "metrics.json", metrics)
 
     log.info("%s fitted in %.2f s\n%s", metrics["model"], fit_time_s, format_table(metrics))

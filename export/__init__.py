@@ -1,0 +1,4 @@
+"""ONNX export of Touchstone's deployable pipelines, and their onnxruntime side.
+
+export/ reads what models/ produced (a run's pipeline.pkl) and never the other way round.
+"""

@@ -1,0 +1,101 @@
+"""What a run deploys: raw sensor readings in, physical quantities or class probabilities out.
+
+A deployable pipeline bundles the fitted preprocessing (features and scaler, or calibration,
+decimation and channel scaling) with the fitted model, so that `predict_raw` on raw readings
+is the eager reference that the exported ONNX graph must match. Runs save it as
+`pipeline.pkl` in their output folder; export/ turns it into one ONNX file.
+"""
+import pickle
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from data.atomic import atomic_write
+from data.features import compute_features, enabled_groups
+from data.fingertip import fsr_force_n
+from data.windows import decimate
+
+
+@dataclass
+class RegressionPipeline:
+    channel_names: list[str]
+    target_names: list[str]
+    feature_groups: list[str]
+    feature_names: list[str]
+    scaler_mean: np.ndarray
+    scaler_scale: np.ndarray
+    model: object
+    description: dict = field(default_factory=dict)
+
+    def features(self, readings) -> np.ndarray:
+        return (compute_features(readings, self.feature_groups) - self.scaler_mean) / self.scaler_scale
+
+    def predict_raw(self, readings):
+        """(prediction in units, interval half-width or None) for raw channel readings."""
+        X = self.features(readings)
+        if hasattr(self.model, "conformal_scale_"):
+            mean, sigma = self.model.predict_std(X)
+            return mean, self.model.conformal_scale_ * sigma
+        return np.asarray(self.model.predict(X)).reshape(len(X), -1), None
+
+
+@dataclass
+class TimeSeriesPipeline:
+    channel_names: list[str]
+    classes: list[str]
+    force_calibration: dict | None
+    decimate: int
+    window_length: int
+    channel_mean: np.ndarray
+    channel_std: np.ndarray
+    model: object
+    description: dict = field(default_factory=dict)
+
+    @property
+    def raw_length(self) -> int:
+        """Steps of one raw window at the recording rate."""
+        return self.window_length * self.decimate
+
+    def preprocess(self, windows) -> np.ndarray:
+        x = np.asarray(windows, dtype=np.float64).copy()
+        if self.force_calibration:
+            calibration = {k: v for k, v in self.force_calibration.items() if k not in ("channel", "index", "renamed")}
+            k = self.force_calibration["index"]
+            x[:, k] = fsr_force_n(x[:, k], **calibration)
+        x = decimate(x, self.decimate)
+        return ((x - self.channel_mean) / self.channel_std).astype(np.float32)
+
+    def predict_raw(self, windows):
+        return self.model.predict_proba(self.preprocess(windows))
+
+
+def regression_pipeline(datamodule, model) -> RegressionPipeline:
+    return RegressionPipeline(list(datamodule.channel_names), list(datamodule.target_names),
+                              enabled_groups(datamodule.features), list(datamodule.feature_names),
+                              datamodule.scaler.mean_.copy(), datamodule.scaler.scale_.copy(), model,
+                              {"source": datamodule.table.description})
+
+
+def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:
+    calibration = None
+    if datamodule.force_calibration:
+        calibration = dict(datamodule.force_calibration)
+        calibration["index"] = datamodule.recordings.channel_names.index(
+            calibration.get("renamed", calibration["channel"].rsplit("_", 1)[0] + "_n"))
+    raw_names = list(datamodule.recordings.channel_names)
+    if calibration:
+        raw_names[calibration["index"]] = calibration["channel"]
+    return TimeSeriesPipeline(raw_names, list(datamodule.classes), calibration, int(datamodule.decimate),
+                              int(datamodule.X_train.shape[-1]), datamodule.channel_mean.reshape(1, -1, 1),
+                              datamodule.channel_std.reshape(1, -1, 1), model,
+                              {"label": datamodule.label, "sample_rate_hz": datamodule.sample_rate_hz * datamodule.decimate})
+
+
+def save_pipeline(pipeline, path) -> Path:
+    return atomic_write(path, lambda tmp: tmp.write_bytes(pickle.dumps(pipeline)))
+
+
+def load_pipeline(path):
+    with open(path, "rb") as handle:
+        return pickle.load(handle)
