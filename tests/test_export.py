@@ -147,3 +147,15 @@ def test_predict_cli_classification_and_wrong_window_length(exported, tmp_path):
     assert not (tmp_path / "x.csv").exists()
     with pytest.raises(Exception, match=r"expected windows of shape \(n, 2, 1400\)"):
         OnnxPredictor(path).predict_windows(np.zeros((2, 2, 700)))
+
+
+def test_export_on_demand_from_a_run_folder(exported, tmp_path):
+    path, _ = exported["decision_tree"]
+    folder = tmp_path / "copy"
+    shutil.copytree(path.parent, folder)
+    (folder / "model.onnx").unlink()
+    result = subprocess.run([sys.executable, "-m", "export.run_export", str(folder)], capture_output=True, text=True, cwd=ROOT)
+    assert result.returncode == 0, result.stderr
+    assert (folder / "model.onnx").stat().st_size > 0
+    result = subprocess.run([sys.executable, "-m", "export.run_export", str(tmp_path)], capture_output=True, text=True, cwd=ROOT)
+    assert result.returncode == 2 and "no pipeline.pkl" in result.stderr

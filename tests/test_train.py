@@ -106,3 +106,4 @@ def test_train_py_writes_under_the_run_dir_only(tmp_path):
     assert result.returncode == 0, result.stderr
     assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
     assert (tmp_path / "run" / "metrics.json").exists() and (tmp_path / "run" / ".hydra" / "config.yaml").exists()
+    assert (tmp_path / "run" / "model.onnx").stat().st_size > 0  # export=onnx is on by default
