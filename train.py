@@ -8,9 +8,12 @@ import sys
 
 import hydra
 from hydra.core.hydra_config import HydraConfig
+from hydra.types import RunMode
 from omegaconf import DictConfig
 
+from data.atomic import atomic_write_text
 from data.errors import InputError
+from export.costs import record_costs
 from export.run_export import export_run
 from models.run import run
 
@@ -22,8 +25,13 @@ def main(cfg: DictConfig) -> float:
         metrics = run(cfg, output_dir)
         if cfg.export.enabled:
             export_run(output_dir, cfg.export.opset, cfg.export.file)
+        if cfg.cost.measure_latency:
+            metrics = record_costs(output_dir, cfg.export.file, cfg.cost.budget_s)
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
+        if HydraConfig.get().mode == RunMode.MULTIRUN:  # one bad job must not end the sweep
+            atomic_write_text(f"{output_dir}/error.txt", f"{error}\n")
+            return float("nan")
         sys.exit(2)
     val = metrics["val"]  # the value a Hydra sweeper would optimise
     return val["average"]["r2"] if "average" in val else val["accuracy"]

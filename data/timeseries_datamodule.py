@@ -54,6 +54,10 @@ class TimeSeriesDataModule:
         recordings = self.source.load()
         if not isinstance(recordings, RecordingSet):
             raise InputError("data=timeseries needs a scene or file of time-series recordings (e.g. scene=fingertip)")
+        # A few raw windows as recorded (before calibration and decimation): what a deployed
+        # model receives, kept for latency measurements of the exported pipeline.
+        start, steps = self.trim_start * self.decimate, self.window_length * self.decimate
+        self.raw_examples = recordings.signals[:256, :, start:start + steps].copy()
         if self.label not in recordings.labels:
             raise InputError(f"data.label '{self.label}' is not a label of these recordings; "
                              f"available: {', '.join(recordings.labels.columns)}")

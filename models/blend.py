@@ -37,18 +37,19 @@ class KFoldBlend(IntervalMixin, BaseEstimator, RegressorMixin):
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
         X, y = np.asarray(X), np.asarray(y, dtype=np.float64)
         y2 = y.reshape(len(y), -1)
-        self.models_, self.fold_fit_time_s_ = [], []
+        self.models_, self.fold_fit_time_s_, self.fold_fit_cpu_time_s_ = [], [], []
         out_of_fold = np.zeros_like(y2)
         folds = self._folds(len(X), groups)
         for k, (fit_rows, held_rows) in enumerate(tqdm(folds, desc="k-fold", disable=not self.progress, leave=False)):
             model = clone(self.estimator)
             if "seed" in model.get_params():
                 model.set_params(seed=self.seed + k)
-            start = time.perf_counter()
+            start, cpu_start = time.perf_counter(), time.process_time()
             # Each fold model early-stops (if it can) on the fold it was not trained on.
             model.fit(X[fit_rows], y[fit_rows], X[held_rows], y[held_rows],
                       epoch_callback=epoch_callback if k == 0 else None)
             self.fold_fit_time_s_.append(time.perf_counter() - start)
+            self.fold_fit_cpu_time_s_.append(time.process_time() - cpu_start)
             if hasattr(model, "predict_proba"):
                 out_of_fold = None
             else:

@@ -27,6 +27,7 @@ class RegressionPipeline:
     scaler_scale: np.ndarray
     model: object
     description: dict = field(default_factory=dict)
+    examples: np.ndarray | None = None  # raw test-split readings, for latency measurements
 
     def features(self, readings) -> np.ndarray:
         return (compute_features(readings, self.feature_groups) - self.scaler_mean) / self.scaler_scale
@@ -51,6 +52,7 @@ class TimeSeriesPipeline:
     channel_std: np.ndarray
     model: object
     description: dict = field(default_factory=dict)
+    examples: np.ndarray | None = None  # raw validation windows, for latency measurements
 
     @property
     def raw_length(self) -> int:
@@ -74,7 +76,8 @@ def regression_pipeline(datamodule, model) -> RegressionPipeline:
     return RegressionPipeline(list(datamodule.channel_names), list(datamodule.target_names),
                               enabled_groups(datamodule.features), list(datamodule.feature_names),
                               datamodule.scaler.mean_.copy(), datamodule.scaler.scale_.copy(), model,
-                              {"source": datamodule.table.description})
+                              {"source": datamodule.table.description},
+                              datamodule.table.channels[datamodule.test_idx][:1024].copy())
 
 
 def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:
@@ -89,7 +92,8 @@ def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:
     return TimeSeriesPipeline(raw_names, list(datamodule.classes), calibration, int(datamodule.decimate),
                               int(datamodule.X_train.shape[-1]), datamodule.channel_mean.reshape(1, -1, 1),
                               datamodule.channel_std.reshape(1, -1, 1), model,
-                              {"label": datamodule.label, "sample_rate_hz": datamodule.sample_rate_hz * datamodule.decimate})
+                              {"label": datamodule.label, "sample_rate_hz": datamodule.sample_rate_hz * datamodule.decimate},
+                              datamodule.raw_examples)
 
 
 def save_pipeline(pipeline, path) -> Path:

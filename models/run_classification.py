@@ -47,12 +47,14 @@ def run_classification(cfg, output_dir, datamodule) -> dict:
     if "modalities" in model.get_params():
         model.set_params(modalities=datamodule.modality_channels)
     with instantiate(cfg.logger, log_dir=str(output_dir / "tensorboard")) as logger:
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         model.fit(X_train, y_train, X_val, y_val, epoch_callback=logger.log_epoch)
-        fit_time_s = time.perf_counter() - start
+        fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
         proba = model.predict_proba(X_val)
         metrics = {"model": type(model.module_).__name__ if hasattr(model, "module_") else type(model).__name__,
                    "n_parameters": int(getattr(model, "n_parameters_", 0)), "fit_time_s": fit_time_s,
+                   "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s,
+                            "n_parameters": int(getattr(model, "n_parameters_", 0))},
                    "val": classification_metrics(y_val, proba, datamodule.classes, datamodule.val_levels_per_window),
                    "data": summary}
         figure = plots.confusion_figure(np.asarray(metrics["val"]["confusion_matrix"]), datamodule.classes,

@@ -61,6 +61,14 @@ def _selection_report(model, targets) -> dict:
     return report
 
 
+def _fold_costs(model) -> dict:
+    """Fit wall and CPU time of every fold model of a (weighted) K-fold blend."""
+    blends = model.models_ if hasattr(model, "weights_") else {"model": model}
+    folds = {n: {"fit_time_s": m.fold_fit_time_s_, "fit_cpu_time_s": m.fold_fit_cpu_time_s_}
+             for n, m in blends.items() if hasattr(m, "fold_fit_time_s_")}
+    return {"folds": folds} if folds else {}
+
+
 def _importances(model):
     if hasattr(model, "selected_tree_importances"):
         return model.selected_tree_importances()
@@ -89,9 +97,9 @@ def run_regression(cfg: DictConfig, output_dir: str | Path, datamodule) -> dict:
     model = instantiate(cfg.model)
     figures = {}
     with instantiate(cfg.logger, log_dir=str(output_dir / "tensorboard")) as logger:
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         _fit(model, datamodule, logger.log_epoch)
-        fit_time_s = time.perf_counter() - start
+        fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
 
         pred_val, pred_test = model.predict(X_val), model.predict(X_test)
         metrics = {
@@ -100,6 +108,8 @@ def run_regression(cfg: DictConfig, output_dir: str | Path, datamodule) -> dict:
             "test": regression_metrics(y_test, pred_test, targets),
             "fit_time_s": fit_time_s,
             **_model_size(model),
+            "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, **_model_size(model),
+                     **_fold_costs(model)},
             "data": datamodule.summary(),
         }
         figures["parity"] = plots.parity_figure(y_test, pred_test, targets, {t: metrics["test"][t]["r2"] for t in targets})
