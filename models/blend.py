@@ -59,7 +59,7 @@ class KFoldBlend(IntervalMixin, BaseEstimator, RegressorMixin):
             self.out_of_fold_ = out_of_fold
             self.data_variance_ = ((y2 - out_of_fold) ** 2).mean(axis=0)
         self.n_features_in_ = X.shape[1]
-        self._single_output = y.ndim == 1
+        self.single_output_ = y.ndim == 1
         return self
 
     def _fold_predictions(self, X) -> np.ndarray:
@@ -67,7 +67,7 @@ class KFoldBlend(IntervalMixin, BaseEstimator, RegressorMixin):
 
     def predict(self, X):
         mean = self._fold_predictions(X).mean(axis=0)
-        return mean[:, 0] if self._single_output else mean
+        return mean[:, 0] if self.single_output_ else mean
 
     def predict_proba(self, X):
         return np.mean([m.predict_proba(X) for m in self.models_], axis=0)

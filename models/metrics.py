@@ -1,6 +1,8 @@
 """Regression scores per target and their uniform average, in physical units.
 
-R^2 follows scikit-learn (a constant target scores 1.0 if predicted exactly, else 0.0).
+R^2 follows scikit-learn (a constant target scores 1.0 if predicted exactly, else 0.0); it is
+undefined for a single sample and reported as None (null in metrics.json), and the average
+skips it.
 MAPE is in percent, with |y| floored at 1e-8 of the target's largest magnitude (or 1e-12)
 so a zero in the targets gives a large but finite figure, never a division by zero.
 """
@@ -13,7 +15,7 @@ METRICS = ("r2", "rmse", "mae", "mape_pct")
 def _scores(true: np.ndarray, pred: np.ndarray) -> dict:
     floor = max(1e-8 * float(np.max(np.abs(true))), 1e-12)
     return {
-        "r2": float(r2_score(true, pred)) if len(true) > 1 else float("nan"),
+        "r2": float(r2_score(true, pred)) if len(true) > 1 else None,
         "rmse": float(np.sqrt(mean_squared_error(true, pred))),
         "mae": float(mean_absolute_error(true, pred)),
         "mape_pct": float(100.0 * np.mean(np.abs(true - pred) / np.maximum(np.abs(true), floor))),
@@ -25,7 +27,11 @@ def regression_metrics(y_true, y_pred, target_names: list[str]) -> dict:
     y_true = np.asarray(y_true, dtype=np.float64).reshape(len(y_true), -1)
     y_pred = np.asarray(y_pred, dtype=np.float64).reshape(y_true.shape)
     scores = {name: _scores(y_true[:, k], y_pred[:, k]) for k, name in enumerate(target_names)}
-    scores["average"] = {m: float(np.mean([scores[t][m] for t in target_names])) for m in METRICS}
+    def mean(values):
+        values = [v for v in values if v is not None]
+        return float(np.mean(values)) if values else None
+
+    scores["average"] = {m: mean([scores[t][m] for t in target_names]) for m in METRICS}
     return scores
 
 
@@ -34,5 +40,6 @@ def format_table(metrics: dict, splits=("val", "test")) -> str:
     lines = [f"{'split':<6}{'target':<14}" + "".join(f"{m:>12}" for m in METRICS)]
     for split in splits:
         for target, row in metrics[split].items():
-            lines.append(f"{split:<6}{target:<14}" + "".join(f"{row[m]:>12.4g}" for m in METRICS))
+            lines.append(f"{split:<6}{target:<14}" + "".join(
+                f"{row[m]:>12.4g}" if row[m] is not None else f"{'n/a':>12}" for m in METRICS))
     return "\n".join(lines)

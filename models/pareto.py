@@ -67,7 +67,10 @@ def _labels(rows) -> list[str]:
     pairs = [dict(o.split("=", 1) for o in r["overrides"] if "=" in o) for r in rows]
     keys = sorted({k for p in pairs for k in p})
     varying = [k for k in keys if len({p.get(k) for p in pairs}) > 1]
-    return [" ".join(f"{k.split('.')[-1]}={p[k]}" for k in varying if k in p) or r["job"] for r, p in zip(rows, pairs)]
+    def short(key):
+        return key.lstrip("+~").split(".")[-1]
+
+    return [" ".join(f"{short(k)}={p[k]}" for k in varying if k in p) or r["job"] for r, p in zip(rows, pairs)]
 
 
 def collect(sweep_dir) -> pd.DataFrame:
@@ -109,6 +112,7 @@ def markdown(frame: pd.DataFrame, parallel_warning: bool) -> str:
 
 def figure(frame: pd.DataFrame):
     import matplotlib
+    import matplotlib.ticker
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -123,6 +127,7 @@ def figure(frame: pd.DataFrame):
         for _, r in points.iterrows():
             ax.annotate(r["label"], (r[cost], r["accuracy"]), fontsize=6, xytext=(3, 3), textcoords="offset points")
         ax.set_xscale("log")
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
         ax.set(xlabel=title + " (log)", ylabel="accuracy", title=f"accuracy vs {title}")
         ax.legend(loc="lower right")
     fig.tight_layout()
@@ -154,4 +159,4 @@ class ParetoCallback(Callback):
 if __name__ == "__main__":
     if len(sys.argv) != 2:
         sys.exit("usage: python -m models.pareto <sweep dir>")
-    print(markdown(write_report(sys.argv[1]), parallel=False))
+    print(markdown(write_report(sys.argv[1]), parallel_warning=False))

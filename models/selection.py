@@ -76,13 +76,13 @@ class ValidationWeightedBlend(IntervalMixin, BaseEstimator, RegressorMixin):
         ranking = self.val_r2_ if self.per_target else np.repeat(
             np.nanmean(self.val_r2_, axis=1, keepdims=True), self.val_r2_.shape[1], axis=1)
         self.weights_, self.fallback_targets_ = validation_weights(ranking, self.mode)
-        self._val_residual = np.asarray(val_residual)
+        self.val_residual_ = np.asarray(val_residual)
         models = list(self.models_.values())
         if all(hasattr(m, "out_of_fold_") for m in models):
             blended = sum(self.weights_[i] * m.out_of_fold_ for i, m in enumerate(models))
             self.data_variance_ = ((y2 - blended) ** 2).mean(axis=0)
         else:
-            self.data_variance_ = (self.weights_ * self._val_residual).sum(axis=0)
+            self.data_variance_ = (self.weights_ * self.val_residual_).sum(axis=0)
         self.n_features_in_ = np.asarray(X).shape[1]
         return self
 

@@ -1,7 +1,20 @@
 from pathlib import Path
 
+import os
+
 import pytest
 from hydra import compose, initialize_config_dir
+from hypothesis import HealthCheck, settings
+
+# Hypothesis profiles. "ci" (the default) is derandomised with no example database, so a failure
+# reproduces exactly and prints its falsifying example; its per-test example counts add up to
+# more than 10,000 generated examples (tests/test_properties.py). "thorough" runs 20x more,
+# random: pytest --hypothesis-profile=thorough tests/test_properties.py
+settings.register_profile("ci", derandomize=True, database=None, deadline=None, print_blob=True,
+                          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+settings.register_profile("thorough", max_examples=2000, deadline=None, print_blob=True,
+                          suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 CONFIG_DIR = str(Path(__file__).resolve().parents[1] / "configs")
 
