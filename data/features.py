@@ -13,8 +13,8 @@ but its own list does not add up to 49; this is the list it describes.)
 
 std is the population standard deviation; skew and kurtosis are the standardised third
 moment and the *excess* fourth moment, in closed form (scipy.stats is ~50x slower per
-sample). For a sample whose channels are all equal they are undefined; we define both as 0,
-as is the z-score. Everything is computed in float64 and is finite for every finite
+sample). For a sample whose channels are all equal (to float64 rounding: std <= 1e-12 |mean|)
+they are undefined; we define both as 0, as are the z-scores and the std (rounding noise). Everything is computed in float64 and is finite for every finite
 non-negative input.
 """
 import numpy as np
@@ -57,12 +57,14 @@ def _moments(r: np.ndarray):
     centred = r - mean
     std = np.sqrt((centred**2).mean(axis=1, keepdims=True))
     # Standardise only where the spread is resolvable in float64; elsewhere the sample is
-    # constant to rounding and the shape statistics are defined as 0.
+    # constant to rounding (twelve equal 1.2e11-ohm readings average to a mean 1 ulp off, and
+    # (r - mean) / (std + 1e-8) would be +/-1) and z-scores and shape statistics are 0.
     resolvable = std > 1e-12 * np.maximum(np.abs(mean), 1e-300)
     z = np.divide(centred, std, out=np.zeros_like(centred), where=resolvable)
     skew = (z**3).mean(axis=1, keepdims=True)
     kurtosis = np.where(resolvable, (z**4).mean(axis=1, keepdims=True) - 3.0, 0.0)
-    return mean, std, skew, kurtosis
+    zscore = np.where(resolvable, centred / (std + EPSILON), 0.0)
+    return mean, np.where(resolvable, std, 0.0), skew, kurtosis, zscore
 
 
 def compute_features(readings, groups) -> np.ndarray:
@@ -71,7 +73,7 @@ def compute_features(readings, groups) -> np.ndarray:
     if r.ndim != 2 or r.shape[1] < 2:
         raise InputError(f"features need a 2-D array with at least 2 channels, got shape {r.shape}")
     blocks = []
-    mean, std, skew, kurtosis = _moments(r)
+    mean, std, skew, kurtosis, zscore = _moments(r)
     for group in enabled_groups(groups):
         if group == "raw":
             blocks.append(r)
@@ -80,7 +82,7 @@ def compute_features(readings, groups) -> np.ndarray:
         elif group == "sqrt":
             blocks.append(np.sqrt(np.abs(r)))
         elif group == "zscore":
-            blocks.append((r - mean) / (std + EPSILON))
+            blocks.append(zscore)
         elif group == "stats":
             blocks.append(np.hstack([mean, std, skew, kurtosis]))
         elif group == "pair_products":

@@ -14,7 +14,8 @@ Defined behaviour where the algorithm is undefined:
 - a target outside the recorded range (no neighbour on one side): one-line error;
 - a class with fewer than 4 distinct f3 values cannot determine a cubic: the degree drops to
   (distinct values - 1), and a class with a single f3 value is an error;
-- windows with f1 = 0 or f3 <= 0 cannot be scaled: they are skipped and counted;
+- windows with f1 = 0 or f3 <= 0 cannot be scaled: they are skipped and counted, and so are
+  windows whose scale factors or scaled values overflow (f3 = 5e-324 gives eta_PR = inf);
 - F_c(d_tar) <= 0 (a cubic extrapolating below zero): eta_TE = 0 is not physical, so the
   class is skipped for that level and counted. No NaN or inf window is ever produced.
 """
@@ -57,6 +58,7 @@ def virtual_force_levels(windows, labels, levels, target_levels, te=0, pr=1):
     scalable = (f1 > 0) & (f3 > 0)
     out_windows, out_labels, out_levels = [], [], []
     report = {"recorded_levels": recorded, "targets": {}, "skipped_windows_zero_f1_or_f3": int((~scalable).sum()),
+              "skipped_windows_overflow": 0,
               "mean_f2_by_level": {float(d): float(f2[levels == d].mean()) for d in recorded}}
     curves = {}
     for c in np.unique(labels):
@@ -76,8 +78,12 @@ def virtual_force_levels(windows, labels, levels, target_levels, te=0, pr=1):
                 continue
             rows = np.flatnonzero((labels == c) & scalable & ((levels == low) | (levels == high)))
             virtual = windows[rows].astype(np.float64)
-            virtual[:, te] *= (level_f1 / f1[rows])[:, None]
-            virtual[:, pr] *= (target / f3[rows])[:, None]
+            with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+                virtual[:, te] *= (level_f1 / f1[rows])[:, None]
+                virtual[:, pr] *= (target / f3[rows])[:, None]
+            finite = np.isfinite(virtual.astype(windows.dtype)).all(axis=(1, 2))
+            report["skipped_windows_overflow"] += int((~finite).sum())
+            rows, virtual = rows[finite], virtual[finite]
             out_windows.append(virtual.astype(windows.dtype))
             out_labels.append(labels[rows])
             out_levels.append(np.full(rows.size, target))

@@ -43,11 +43,11 @@ class PhysicsFeatures(nn.Module):
             elif group == "sqrt":
                 blocks.append(torch.sqrt(r.abs()))
             elif group == "zscore":
-                blocks.append(centred / (std + self.epsilon))
+                blocks.append(torch.where(resolvable, centred / (std + self.epsilon), torch.zeros_like(centred)))
             elif group == "stats":
                 skew = (z ** 3).mean(dim=1, keepdim=True)
                 kurtosis = torch.where(resolvable, (z ** 4).mean(dim=1, keepdim=True) - 3.0, torch.zeros_like(mean))
-                blocks.append(torch.cat([mean, std, skew, kurtosis], dim=1))
+                blocks.append(torch.cat([mean, torch.where(resolvable, std, torch.zeros_like(std)), skew, kurtosis], dim=1))
             elif group == "pair_products":
                 blocks.append(r[:, :-1] * r[:, 1:])
             else:
@@ -69,16 +69,19 @@ class RegressionFrontEnd(nn.Module):
 
 
 class ResMLPInUnits(nn.Module):
-    """The residual MLP with its target de-standardisation: features -> targets in units."""
+    """The residual MLP with its own input standardisation and target de-standardisation:
+    features -> targets in units."""
 
     def __init__(self, regressor):
         super().__init__()
         self.net = regressor.module_.cpu().eval()
+        self.register_buffer("feature_mean", torch.as_tensor(regressor.feature_mean_, dtype=torch.float32))
+        self.register_buffer("feature_scale", torch.as_tensor(regressor.feature_scale_, dtype=torch.float32))
         self.register_buffer("target_mean", torch.as_tensor(regressor.target_mean_, dtype=torch.float32))
         self.register_buffer("target_scale", torch.as_tensor(regressor.target_scale_, dtype=torch.float32))
 
     def forward(self, features):
-        return self.net(features) * self.target_scale + self.target_mean
+        return self.net((features - self.feature_mean) / self.feature_scale) * self.target_scale + self.target_mean
 
 
 class WindowClassifier(nn.Module):
@@ -89,8 +92,12 @@ class WindowClassifier(nn.Module):
         self.net = pipeline.model.module_.cpu().eval()
         self.decimate = pipeline.decimate
         self.calibration = dict(pipeline.force_calibration or {})
-        self.register_buffer("channel_mean", torch.as_tensor(pipeline.channel_mean, dtype=torch.float64))
-        self.register_buffer("channel_std", torch.as_tensor(pipeline.channel_std, dtype=torch.float64))
+        # the datamodule's channel scaling followed by the classifier's own: one affine map
+        model = pipeline.model
+        mean = pipeline.channel_mean + model.channel_mean_ * pipeline.channel_std
+        std = pipeline.channel_std * model.channel_std_
+        self.register_buffer("channel_mean", torch.as_tensor(mean, dtype=torch.float64))
+        self.register_buffer("channel_std", torch.as_tensor(std, dtype=torch.float64))
 
     def _newtons(self, volts):
         c = self.calibration

@@ -4,7 +4,9 @@ Training as the seed paper: cross-entropy, mini-batches of 128, 40 epochs, SGD (
 from lr 0.05 divided by 10 at epochs 5, 15 and 25; all configurable. The network is given as
 a factory (Hydra `_partial_: true`) called at fit time with the data's shape:
 network(n_channels=..., n_classes=..., length=..., modalities=...).
-Deterministic under `seed` on CPU; `device=auto` uses a GPU when there is one.
+Deterministic under `seed` on CPU; `device=auto` uses a GPU when there is one. Each channel
+is standardised inside `fit` with the training windows' statistics, so windows of any scale
+(1e-6 or 1e6) train alike.
 """
 import math
 import time
@@ -17,7 +19,7 @@ from tqdm.auto import tqdm
 
 from data.errors import InputError
 from models.conv_blocks import count_parameters
-from models.resmlp import resolve_device
+from models.resmlp import flush_denormals, resolve_device
 
 
 class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
@@ -41,20 +43,30 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         for start in range(0, len(X), size):
             yield X[start:start + size]
 
+    def _scaled(self, X) -> np.ndarray:
+        return ((np.asarray(X, dtype=np.float64) - self.channel_mean_) / self.channel_std_).astype(np.float32)
+
     def _logits(self, X) -> torch.Tensor:
         self.module_.eval()
         with torch.no_grad():
             return torch.cat([self.module_(torch.as_tensor(b, device=self.device_)).float().cpu()
-                              for b in self._batches(np.asarray(X, dtype=np.float32), 512)])
+                              for b in self._batches(self._scaled(X), 512)])
 
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
-        torch.set_flush_denormal(True)  # denormals slowed CPU training of a ResNet 7x
+        with flush_denormals():
+            return self._fit(X, y, X_val, y_val, epoch_callback)
+
+    def _fit(self, X, y, X_val, y_val, epoch_callback):
         torch.manual_seed(self.seed)
         X = np.asarray(X, dtype=np.float32)
         y = np.asarray(y, dtype=np.int64)
         if X.ndim != 3:
             raise InputError(f"time-series classifiers need windows of shape (n, channels, length), got {X.shape}")
         n_classes = int(max(y.max(), np.max(y_val) if y_val is not None else 0)) + 1
+        self.channel_mean_ = X.astype(np.float64).mean(axis=(0, 2), keepdims=True)
+        spread = X.astype(np.float64).std(axis=(0, 2), keepdims=True)
+        self.channel_std_ = np.where(spread > 0, spread, 1.0)
+        X = self._scaled(X)
         self.classes_ = np.arange(n_classes)
         self.device_ = resolve_device(self.device)
         self.module_ = self.network(n_channels=X.shape[1], n_classes=n_classes, length=X.shape[2],

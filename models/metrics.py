@@ -1,21 +1,37 @@
 """Regression scores per target and their uniform average, in physical units.
 
-R^2 follows scikit-learn (a constant target scores 1.0 if predicted exactly, else 0.0); it is
-undefined for a single sample and reported as None (null in metrics.json), and the average
-skips it.
+R^2 = 1 - SS_res / SS_tot, as scikit-learn: a constant target (SS_tot = 0) scores 1.0 if
+predicted exactly, else 0.0. Where SS_tot is so small that the ratio overflows (targets spread
+over 1e-157, say) R^2 is floored at -1e12 instead of -inf. It is undefined for a single sample
+and reported as None (null in metrics.json); the average skips it.
 MAPE is in percent, with |y| floored at 1e-8 of the target's largest magnitude (or 1e-12)
 so a zero in the targets gives a large but finite figure, never a division by zero.
 """
 import numpy as np
-from sklearn.metrics import mean_absolute_error, mean_squared_error, r2_score
+from sklearn.metrics import mean_absolute_error, mean_squared_error
 
 METRICS = ("r2", "rmse", "mae", "mape_pct")
+
+
+R2_FLOOR = -1e12
+
+
+def r_squared(true: np.ndarray, pred: np.ndarray) -> float | None:
+    if len(true) < 2:
+        return None
+    ss_res = float(np.sum((true - pred) ** 2))
+    ss_tot = float(np.sum((true - true.mean()) ** 2))
+    if ss_tot == 0.0:
+        return 1.0 if ss_res == 0.0 else 0.0
+    with np.errstate(over="ignore", divide="ignore"):
+        ratio = ss_res / ss_tot
+    return float(max(1.0 - ratio, R2_FLOOR)) if np.isfinite(ratio) else R2_FLOOR
 
 
 def _scores(true: np.ndarray, pred: np.ndarray) -> dict:
     floor = max(1e-8 * float(np.max(np.abs(true))), 1e-12)
     return {
-        "r2": float(r2_score(true, pred)) if len(true) > 1 else None,
+        "r2": r_squared(true, pred),
         "rmse": float(np.sqrt(mean_squared_error(true, pred))),
         "mae": float(mean_absolute_error(true, pred)),
         "mape_pct": float(100.0 * np.mean(np.abs(true - pred) / np.maximum(np.abs(true), floor))),

@@ -72,7 +72,9 @@ def test_resmlp_survives_a_last_batch_of_one_and_reports_divergence():
     X, y = toy(33)  # 33 rows, batch 32: the last batch has a single row
     ResMLPRegressor(max_epochs=2, batch_size=32, progress=False).fit(X, y, X[:5], y[:5])
     with pytest.raises(InputError, match="diverged at epoch 1"):
-        ResMLPRegressor(max_epochs=2, progress=False).fit(X * 1e300, y * 1e300, X[:5] * 1e300, y[:5])
+        ResMLPRegressor(max_epochs=2, lr=1e12, progress=False).fit(X, y, X[:5], y[:5])
+    with pytest.raises(InputError, match="too large to standardise"):
+        ResMLPRegressor(max_epochs=2, progress=False).fit(X * 1e300, y, X[:5], y[:5])
 
 
 def test_random_forest_per_output_is_one_forest_per_target():

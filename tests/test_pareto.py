@@ -31,7 +31,7 @@ def sweep(tmp_path, *overrides):
 
 
 def test_a_two_job_sweep_ends_in_a_report_with_both_jobs_and_their_costs(tmp_path):
-    folder = sweep(tmp_path, "model=decision_tree,extra_trees", "model.max_depth=6")
+    folder = sweep(tmp_path, "model=decision_tree,extra_trees")
     for name in ("pareto.csv", "pareto.md", "pareto.png"):
         assert (folder / name).stat().st_size > 0
     report = pd.read_csv(folder / "pareto.csv")

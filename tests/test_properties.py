@@ -52,6 +52,7 @@ def readings(draw, n_channels=12):
 @example(np.zeros((1, 12)), np.float64)
 @example(np.full((1, 12), 1e12), np.float32)
 @example(np.full((1, 12), 5e-324), np.float64)
+@example(np.full((1, 12), 1.22167959e11), np.float64)  # found by Hypothesis: z-scores were +/-1
 def test_features_are_finite_and_defined_everywhere(r, dtype):
     features = compute_features(r.astype(dtype), ALL)
     assert np.isfinite(features).all()
@@ -95,8 +96,13 @@ def window_sets(draw):
     return windows, labels, np.asarray(levels), target
 
 
+DENORMAL_CASE = (np.concatenate([np.full((4, 2, 6), 5e-324), [[[5e-324] * 6, [1.0] + [5e-324] * 5]]]),
+                 np.zeros(5, dtype=int), np.array([1.0, 5.0, 10.0, 15.0, 20.0]), 7.5)
+
+
 @examples(1500)
 @given(window_sets())
+@example(DENORMAL_CASE)  # found by Hypothesis: f3 = 5e-324 gave eta_PR = inf and inf windows
 def test_virtual_force_levels_never_make_nan_windows(case):
     windows, labels, levels, target = case
     try:
@@ -114,6 +120,7 @@ targets = arrays(np.float64, st.tuples(st.integers(1, 30), st.just(2)),
 
 @examples(1500)
 @given(targets, st.sampled_from(["perfect", "constant", "noisy"]))
+@example(np.array([[4.16e-157, 0.0], [0.0, 0.0]]), "constant")  # found by Hypothesis: R2 was -inf
 def test_metrics_are_defined_for_constant_zero_single_and_perfect(y, kind):
     predicted = {"perfect": y, "constant": np.zeros_like(y) + 1.0, "noisy": y + 1.0}[kind]
     scores = regression_metrics(y, predicted, ["a_mm", "b_pa"])
