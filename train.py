@@ -5,8 +5,10 @@ ONNX file, and a user-input problem ends in one line on stderr and exit code 2 i
 traceback.
 """
 import sys
+from pathlib import Path
 
 import hydra
+from hydra import compose, initialize_config_dir
 from hydra.core.hydra_config import HydraConfig
 from hydra.types import RunMode
 from omegaconf import DictConfig
@@ -37,5 +39,21 @@ def main(cfg: DictConfig) -> float:
     return val["average"]["r2"] if "average" in val else val["accuracy"]
 
 
+def check_overrides(argv: list[str]) -> None:
+    """Compose the config once up front so that an unknown option or key, or a malformed
+    override, is one line and exit code 2 like every other input error (Hydra would print a
+    multi-line message and exit 1). Sweeps and Hydra's own flags are left to Hydra."""
+    if any(arg.startswith("-") for arg in argv):
+        return
+    try:
+        with initialize_config_dir(config_dir=str(Path(__file__).resolve().parent / "configs"), version_base="1.3"):
+            compose(config_name="config", overrides=argv, return_hydra_config=True)
+    except Exception as error:  # Hydra's and OmegaConf's composition errors
+        message = " ".join(str(error).split("Config search path")[0].split())
+        print(f"error: {message}", file=sys.stderr)
+        sys.exit(2)
+
+
 if __name__ == "__main__":
+    check_overrides(sys.argv[1:])
     main()
