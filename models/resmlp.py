@@ -17,7 +17,6 @@ units of y.
 import contextlib
 import copy
 import math
-import time
 
 import numpy as np
 import torch

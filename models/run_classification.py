@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import torch
 from hydra.utils import instantiate
 from sklearn.metrics import confusion_matrix, f1_score, log_loss
 
