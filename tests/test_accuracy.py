@@ -6,7 +6,7 @@ from models.run import run
 
 def test_extra_trees_locates_presses_on_unseen_points(compose_config, tmp_path):
     cfg = compose_config(["scene.protocol=random", "scene.n_samples=3000", "scene.progress=false",
-                          "model=extra_trees"])
+                          "model=extra_trees", "analysis.ablation=false"])
     test = run(cfg, tmp_path)["test"]
     print({t: round(test[t]["r2"], 4) for t in test})
     # Measured R^2 0.939 (x) and 0.944 (y) at seed 0 (0.92-0.95 over seeds 0-2). Depth and
@@ -19,7 +19,7 @@ def test_extra_trees_locates_presses_on_unseen_points(compose_config, tmp_path):
 @pytest.mark.slow
 def test_resmlp_learns_depth_on_unseen_presses(compose_config, tmp_path):
     cfg = compose_config(["scene.protocol=random", "scene.n_samples=3000", "scene.progress=false",
-                          "model=resmlp", "trainer.progress=false", "trainer.max_epochs=150"])
+                          "model=resmlp", "trainer.progress=false", "trainer.max_epochs=150", "analysis.ablation=false"])
     test = run(cfg, tmp_path)["test"]
     print({t: round(test[t]["r2"], 4) for t in test})
     # Measured 0.996 (x), 0.996 (y), 0.866 (depth, pressure) at seed 0: the net untangles depth
