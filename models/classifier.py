@@ -52,11 +52,8 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             return torch.cat([self.module_(torch.as_tensor(b, device=self.device_)).float().cpu()
                               for b in self._batches(self._scaled(X), 512)])
 
+    @flush_denormals()
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
-        with flush_denormals():
-            return self._fit(X, y, X_val, y_val, epoch_callback)
-
-    def _fit(self, X, y, X_val, y_val, epoch_callback):
         torch.manual_seed(self.seed)
         X = np.asarray(X, dtype=np.float32)
         y = np.asarray(y, dtype=np.int64)
