@@ -13,8 +13,8 @@ from pathlib import Path
 
 from data.atomic import atomic_write
 from data.errors import InputError
-from data.table import read_table_file
-from export.runtime import OnnxPredictor
+from data.table_files import read_table_file
+from export.onnx_predictor import OnnxPredictor
 
 KEYS = ("model", "input", "output", "threads")
 

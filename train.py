@@ -1,11 +1,18 @@
 """Train and evaluate one Touchstone model: `python train.py model=resmlp scene.n_samples=2000 seed=3`.
 
-Thin on purpose: Hydra composes the config, models/run.py does the work, export/ writes the
+Thin on purpose: Hydra composes the config, models/runs/run.py does the work, export/ writes the
 ONNX file, and a user-input problem ends in one line on stderr and exit code 2 instead of a
 traceback.
 """
+import os
 import sys
 from pathlib import Path
+
+# Nothing is installed into site-packages (no top-level `data`, `models`, `export` packages to
+# shadow a user's own): the repo root is the import root. Jobs that a launcher starts in other
+# processes (submitit, joblib) inherit it through PYTHONPATH.
+ROOT = Path(__file__).resolve().parent
+os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
 
 import hydra
 from hydra import compose, initialize_config_dir
@@ -15,9 +22,9 @@ from omegaconf import DictConfig
 
 from data.atomic import atomic_write_text
 from data.errors import InputError
-from export.costs import record_costs
+from export.latency import record_costs
 from export.run_export import export_run
-from models.run import run
+from models.runs.run import run
 
 
 @hydra.main(version_base="1.3", config_path="configs", config_name="config")
@@ -46,7 +53,7 @@ def check_overrides(argv: list[str]) -> None:
     if any(arg.startswith("-") for arg in argv):
         return
     try:
-        with initialize_config_dir(config_dir=str(Path(__file__).resolve().parent / "configs"), version_base="1.3"):
+        with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
             compose(config_name="config", overrides=argv, return_hydra_config=True)
     except Exception as error:  # Hydra's and OmegaConf's composition errors
         message = " ".join(str(error).split("Config search path")[0].split())

@@ -19,8 +19,8 @@ from hydra.utils import instantiate
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from models.blend import KFoldBlend  # noqa: E402
-from models.metrics import regression_metrics  # noqa: E402
+from models.kfold_blend import KFoldBlend  # noqa: E402
+from models.report.metrics import regression_metrics  # noqa: E402
 
 
 def main(argv=None):

@@ -3,7 +3,7 @@
     .venv/bin/python bench/latency.py [--families resmlp extra_trees ...] [--budget 3]
 
 For each family: train on the default rubber12 scene (time-series families: materials10,
-1 epoch: latency does not depend on training), export, then measure with export/costs.py
+1 epoch: latency does not depend on training), export, then measure with export/latency.py
 (what every run records): batch-1 latency p50/p99 and batch-1024 throughput, eager (numpy
 features + scikit-learn or torch) and onnxruntime with 1 intra-op thread and its default.
 Also prints the parity on the run's test inputs (max relative difference, and rows over 1e-4:
@@ -22,11 +22,11 @@ sys.path.insert(0, str(ROOT))
 
 from hydra import compose, initialize_config_dir  # noqa: E402
 
-from export.costs import measure  # noqa: E402
+from export.latency import measure  # noqa: E402
 from export.run_export import export_run  # noqa: E402
-from export.runtime import OnnxPredictor  # noqa: E402
+from export.onnx_predictor import OnnxPredictor  # noqa: E402
 from models.deployable import RegressionPipeline, load_pipeline  # noqa: E402
-from models.run import run  # noqa: E402
+from models.runs.run import run  # noqa: E402
 
 REGRESSION = ["resmlp", "random_forest", "extra_trees", "decision_tree", "blend"]
 CLASSIFICATION = ["prcnn", "rescnn", "inceptiontime", "lstm_fcn"]

@@ -21,8 +21,8 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from data.atomic import atomic_write  # noqa: E402
-from data.fingertip import FingertipScene  # noqa: E402
-from data.rubber12 import Rubber12Scene  # noqa: E402
+from data.scenes.fingertip import FingertipScene  # noqa: E402
+from data.scenes.rubber12 import Rubber12Scene  # noqa: E402
 
 
 def effects_of(name):

@@ -16,8 +16,13 @@ moment and the *excess* fourth moment, in closed form (scipy.stats is ~50x slowe
 sample). For a sample whose channels are all equal (to float64 rounding: std <= 1e-12 |mean|)
 they are undefined; we define both as 0, as are the z-scores and the std (rounding noise). Everything is computed in float64 and is finite for every finite
 non-negative input.
+
+One implementation: the operators are a torch module (`PhysicsFeatures`), called on numpy
+arrays in training (`compute_features`) and on tensors inside the exported ONNX graph.
 """
 import numpy as np
+import torch
+from torch import nn
 
 from data.errors import InputError
 
@@ -52,19 +57,49 @@ def feature_names(channels: list[str], groups) -> list[str]:
     return names
 
 
-def _moments(r: np.ndarray):
-    mean = r.mean(axis=1, keepdims=True)
-    centred = r - mean
-    std = np.sqrt((centred**2).mean(axis=1, keepdims=True))
-    # Standardise only where the spread is resolvable in float64; elsewhere the sample is
-    # constant to rounding (twelve equal 1.2e11-ohm readings average to a mean 1 ulp off, and
-    # (r - mean) / (std + 1e-8) would be +/-1) and z-scores and shape statistics are 0.
-    resolvable = std > 1e-12 * np.maximum(np.abs(mean), 1e-300)
-    z = np.divide(centred, std, out=np.zeros_like(centred), where=resolvable)
-    skew = (z**3).mean(axis=1, keepdims=True)
-    kurtosis = np.where(resolvable, (z**4).mean(axis=1, keepdims=True) - 3.0, 0.0)
-    zscore = np.where(resolvable, centred / (std + EPSILON), 0.0)
-    return mean, np.where(resolvable, std, 0.0), skew, kurtosis, zscore
+class PhysicsFeatures(nn.Module):
+    """(batch, channels) readings -> (batch, features), computed in float64 (so a constant
+    sample's shape statistics are exactly 0, and products of 1e9-ohm readings stay exact)."""
+
+    def __init__(self, groups):
+        super().__init__()
+        self.groups = enabled_groups(groups)
+        # Small constants as float64 buffers keep their exact values (a Python scalar passes
+        # through float32 in the ONNX exporter: 1e-12 became 9.99999996e-13).
+        self.register_buffer("epsilon", torch.tensor(EPSILON, dtype=torch.float64))
+        self.register_buffer("relative_floor", torch.tensor(1e-12, dtype=torch.float64))
+        self.register_buffer("tiny", torch.tensor(1e-300, dtype=torch.float64))
+
+    def forward(self, r: torch.Tensor) -> torch.Tensor:
+        r = r.double()
+        mean = r.mean(dim=1, keepdim=True)
+        centred = r - mean
+        std = torch.sqrt((centred * centred).mean(dim=1, keepdim=True))
+        # Standardise only where the spread is resolvable in float64; elsewhere the sample is
+        # constant to rounding (twelve equal 1.2e11-ohm readings average to a mean 1 ulp off,
+        # and (r - mean) / (std + 1e-8) would be +/-1) and z-scores and shape statistics are 0.
+        resolvable = std > self.relative_floor * torch.maximum(mean.abs(), self.tiny)
+        zero = torch.zeros_like(centred)
+        z = torch.where(resolvable, centred / torch.where(resolvable, std, torch.ones_like(std)), zero)
+        blocks = []
+        for group in self.groups:
+            if group == "raw":
+                blocks.append(r)
+            elif group == "log1p":
+                blocks.append(torch.log1p(r.abs()))
+            elif group == "sqrt":
+                blocks.append(torch.sqrt(r.abs()))
+            elif group == "zscore":
+                blocks.append(torch.where(resolvable, centred / (std + self.epsilon), zero))
+            elif group == "stats":
+                skew = (z ** 3).mean(dim=1, keepdim=True)
+                kurtosis = torch.where(resolvable, (z ** 4).mean(dim=1, keepdim=True) - 3.0, torch.zeros_like(mean))
+                blocks.append(torch.cat([mean, torch.where(resolvable, std, torch.zeros_like(std)), skew, kurtosis], dim=1))
+            elif group == "pair_products":
+                blocks.append(r[:, :-1] * r[:, 1:])
+            else:
+                blocks.append(r[:, :-1] / (r[:, 1:] + self.epsilon))
+        return torch.cat(blocks, dim=1)
 
 
 def compute_features(readings, groups) -> np.ndarray:
@@ -72,21 +107,5 @@ def compute_features(readings, groups) -> np.ndarray:
     r = np.asarray(readings, dtype=np.float64)
     if r.ndim != 2 or r.shape[1] < 2:
         raise InputError(f"features need a 2-D array with at least 2 channels, got shape {r.shape}")
-    blocks = []
-    mean, std, skew, kurtosis, zscore = _moments(r)
-    for group in enabled_groups(groups):
-        if group == "raw":
-            blocks.append(r)
-        elif group == "log1p":
-            blocks.append(np.log1p(np.abs(r)))
-        elif group == "sqrt":
-            blocks.append(np.sqrt(np.abs(r)))
-        elif group == "zscore":
-            blocks.append(zscore)
-        elif group == "stats":
-            blocks.append(np.hstack([mean, std, skew, kurtosis]))
-        elif group == "pair_products":
-            blocks.append(r[:, :-1] * r[:, 1:])
-        else:
-            blocks.append(r[:, :-1] / (r[:, 1:] + EPSILON))
-    return np.hstack(blocks)
+    with torch.no_grad():
+        return PhysicsFeatures(groups)(torch.from_numpy(np.ascontiguousarray(r))).numpy()

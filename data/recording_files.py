@@ -15,7 +15,7 @@ import pandas as pd
 
 from data.errors import InputError
 from data.recordings import RecordingSet
-from data.table import check_numeric_columns, read_table_file
+from data.table_files import check_numeric_columns, read_table_file
 
 
 def _stack(arrays, source):

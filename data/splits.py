@@ -28,16 +28,31 @@ def holdout(indices: np.ndarray, groups: np.ndarray, fraction: float, split: str
     return indices[kept], indices[held]
 
 
-def fold_indices(indices: np.ndarray, groups: np.ndarray, n_folds: int, split: str, seed: int):
-    """K folds over `indices`: a list of (fit_indices, fold_indices) pairs, positions into the data."""
+def kfold_indices(n_rows: int, n_folds: int, seed: int, groups=None):
+    """K folds over rows 0..n_rows-1: ([(fit_rows, held_rows), ...], warning or None).
+
+    With `groups`, every group's rows stay in one fold (GroupKFold, shuffled by `seed`). Grouped
+    folds never fall back to ungrouped ones: with fewer groups than folds, each group becomes a
+    fold and the returned warning says so (callers record it); fewer than two groups is an error.
+    """
     if n_folds < 2:
-        raise InputError(f"data.n_folds must be >= 2, got {n_folds}")
-    if split == "grouped":
-        if np.unique(groups[indices]).size < n_folds:
-            raise InputError(f"data.n_folds={n_folds} exceeds the number of press points")
-        folds = GroupKFold(n_splits=n_folds, shuffle=True, random_state=seed).split(indices, groups=groups[indices])
+        raise InputError(f"K-fold needs n_folds >= 2, got {n_folds}")
+    warning = None
+    if groups is not None:
+        groups = np.asarray(groups)
+        if len(groups) != n_rows:
+            raise InputError(f"K-fold: {len(groups)} group ids for {n_rows} rows")
+        n_groups = np.unique(groups).size
+        if n_groups < 2:
+            raise InputError("grouped K-fold needs at least two groups (press points) in the training split")
+        if n_groups < n_folds:
+            warning = (f"grouped K-fold: only {n_groups} groups in the training split, so {n_groups} folds "
+                       f"instead of {n_folds}")
+            n_folds = n_groups
+        splitter = GroupKFold(n_splits=n_folds, shuffle=True, random_state=seed)
+        folds = splitter.split(np.zeros(n_rows), groups=groups)
     else:
-        if indices.size < n_folds:
-            raise InputError(f"data.n_folds={n_folds} exceeds the {indices.size} training rows")
-        folds = KFold(n_splits=n_folds, shuffle=True, random_state=seed).split(indices)
-    return [(indices[a], indices[b]) for a, b in folds]
+        if n_rows < n_folds:
+            raise InputError(f"K-fold with n_folds={n_folds} needs at least that many rows, got {n_rows}")
+        folds = KFold(n_splits=n_folds, shuffle=True, random_state=seed).split(np.zeros(n_rows))
+    return [(fit, held) for fit, held in folds], warning

@@ -18,7 +18,7 @@ import numpy as np
 from sklearn.model_selection import StratifiedShuffleSplit
 
 from data.errors import InputError
-from data.fingertip import fsr_force_n
+from data.physics.force_sensing_resistor import calibrated_channel_name, fsr_force_n
 from data.recordings import RecordingSet
 from data.virtual_force_levels import virtual_force_levels
 from data.windows import cut_windows, decimate
@@ -68,8 +68,8 @@ class TimeSeriesDataModule:
                 raise InputError(f"data.force_calibration.channel '{channel}' is not a channel; "
                                  f"available: {', '.join(recordings.channel_names)}")
             k = recordings.channel_names.index(channel)
+            recordings.channel_names[k] = calibrated_channel_name(channel, calibration.pop("renamed", None))
             recordings.signals[:, k] = fsr_force_n(recordings.signals[:, k], **calibration)
-            recordings.channel_names[k] = calibration.get("renamed", channel.rsplit("_", 1)[0] + "_n")
         return recordings
 
     def _channel_index(self, channel, names) -> int:

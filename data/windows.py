@@ -12,14 +12,16 @@ import numpy as np
 from data.errors import InputError
 
 
-def decimate(signals: np.ndarray, factor: int) -> np.ndarray:
-    """Block means over the last axis; a trailing partial block is dropped."""
+def decimate(signals, factor: int):
+    """Block means over the last axis; a trailing partial block is dropped. The same code runs
+    on numpy arrays (training) and torch tensors (the exported graph)."""
     if factor < 1:
         raise InputError(f"data.decimate must be >= 1, got {factor}")
     if factor == 1:
         return signals
     usable = signals.shape[-1] // factor * factor
-    return signals[..., :usable].reshape(*signals.shape[:-1], usable // factor, factor).mean(axis=-1)
+    blocks = signals[..., :usable]
+    return blocks.reshape(tuple(blocks.shape[:-1]) + (usable // factor, factor)).mean(-1)
 
 
 def window_starts(n_steps: int, length: int, step: int) -> np.ndarray:

@@ -9,22 +9,30 @@ Metadata describe the inputs and outputs so the predict side can check a file ag
 """
 import hashlib
 import json
+import tomllib
+from pathlib import Path
 
 import numpy as np
 import onnx
 import torch
 from onnx import TensorProto
 
-from export.compose import GraphBuilder, tensor
+from export.graph_builder import GraphBuilder, tensor
 from export.torch_graphs import RegressionFrontEnd, ResMLPInUnits, WindowClassifier, to_onnx
 from export.tree_graphs import tree_to_onnx
-from models.blend import KFoldBlend
+from models.kfold_blend import KFoldBlend
 from models.deployable import RegressionPipeline, TimeSeriesPipeline
-from models.resmlp import ResMLPRegressor
-from models.selection import ValidationWeightedBlend
+from models.resmlp_regressor import ResMLPRegressor
+from models.weighted_blend import ValidationWeightedBlend
 from models.trees import TreeRegressor
 
-VERSION = "0.1.0"
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def touchstone_version() -> str:
+    """The package version, kept in one place: pyproject.toml."""
+    with open(ROOT / "pyproject.toml", "rb") as handle:
+        return tomllib.load(handle)["project"]["version"]
 
 
 def _leaf(builder, model, features, n_features, n_targets, opset, prefix) -> str:
@@ -106,7 +114,7 @@ def timeseries_graph(pipeline: TimeSeriesPipeline, opset: int, metadata: dict) -
 
 
 def metadata_for(pipeline, config_hash: str, opset: int) -> dict[str, str]:
-    common = {"touchstone_version": VERSION, "config_hash": config_hash, "opset": str(opset),
+    common = {"touchstone_version": touchstone_version(), "config_hash": config_hash, "opset": str(opset),
               "channels": json.dumps(pipeline.channel_names), "model": type(pipeline.model).__name__}
     if isinstance(pipeline, RegressionPipeline):
         units = {t: t.rsplit("_", 1)[-1] for t in pipeline.target_names}

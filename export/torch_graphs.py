@@ -1,8 +1,9 @@
-"""Torch modules that restate the deployed preprocessing for ONNX, and the torch exporter call.
+"""Torch modules that wrap a deployable pipeline for ONNX, and the torch exporter call.
 
-`PhysicsFeatures` computes data/features.py's operators in float64 (so a constant sample's
-shape statistics are exactly 0, as in numpy, and products of 1e9-ohm readings stay exact);
-the rest of the graph runs in float32.
+The preprocessing steps themselves are not restated here: the physics features, the FSR
+calibration and the decimation are the data side's own torch code (data/features.py,
+data/physics/force_sensing_resistor.py, data/windows.py), the same code training ran. Features
+run in float64; the rest of the graph in float32.
 """
 import contextlib
 import io
@@ -14,46 +15,9 @@ import onnx
 import torch
 from torch import nn
 
-EPSILON = 1e-8
-
-
-class PhysicsFeatures(nn.Module):
-    def __init__(self, groups: list[str]):
-        super().__init__()
-        self.groups = list(groups)
-        # Small constants as float64 buffers keep their exact values (a Python scalar passes
-        # through float32 in the exporter: 1e-12 became 9.99999996e-13).
-        self.register_buffer("epsilon", torch.tensor(EPSILON, dtype=torch.float64))
-        self.register_buffer("relative_floor", torch.tensor(1e-12, dtype=torch.float64))
-        self.register_buffer("tiny", torch.tensor(1e-300, dtype=torch.float64))
-
-    def forward(self, r: torch.Tensor) -> torch.Tensor:
-        r = r.double()
-        mean = r.mean(dim=1, keepdim=True)
-        centred = r - mean
-        std = torch.sqrt((centred * centred).mean(dim=1, keepdim=True))
-        resolvable = std > self.relative_floor * torch.maximum(mean.abs(), self.tiny)
-        z = torch.where(resolvable, centred / torch.where(resolvable, std, torch.ones_like(std)), torch.zeros_like(centred))
-        blocks = []
-        for group in self.groups:
-            if group == "raw":
-                blocks.append(r)
-            elif group == "log1p":
-                blocks.append(torch.log1p(r.abs()))
-            elif group == "sqrt":
-                blocks.append(torch.sqrt(r.abs()))
-            elif group == "zscore":
-                blocks.append(torch.where(resolvable, centred / (std + self.epsilon), torch.zeros_like(centred)))
-            elif group == "stats":
-                skew = (z ** 3).mean(dim=1, keepdim=True)
-                kurtosis = torch.where(resolvable, (z ** 4).mean(dim=1, keepdim=True) - 3.0, torch.zeros_like(mean))
-                blocks.append(torch.cat([mean, torch.where(resolvable, std, torch.zeros_like(std)), skew, kurtosis], dim=1))
-            elif group == "pair_products":
-                blocks.append(r[:, :-1] * r[:, 1:])
-            else:
-                blocks.append(r[:, :-1] / (r[:, 1:] + self.epsilon))
-        return torch.cat(blocks, dim=1)
-
+from data.features import PhysicsFeatures
+from data.physics.force_sensing_resistor import CALIBRATION_KEYS, FsrCalibration
+from data.windows import decimate
 
 class RegressionFrontEnd(nn.Module):
     """raw readings (float64) -> physics features -> training-split standardisation -> float32."""
@@ -91,7 +55,10 @@ class WindowClassifier(nn.Module):
         super().__init__()
         self.net = pipeline.model.module_.cpu().eval()
         self.decimate = pipeline.decimate
-        self.calibration = dict(pipeline.force_calibration or {})
+        calibration = pipeline.force_calibration
+        self.calibrated_channel = calibration["index"] if calibration else None
+        if calibration:
+            self.calibration = FsrCalibration(**{k: v for k, v in calibration.items() if k in CALIBRATION_KEYS})
         # the datamodule's channel scaling followed by the classifier's own: one affine map
         model = pipeline.model
         mean = pipeline.channel_mean + model.channel_mean_ * pipeline.channel_std
@@ -99,25 +66,12 @@ class WindowClassifier(nn.Module):
         self.register_buffer("channel_mean", torch.as_tensor(mean, dtype=torch.float64))
         self.register_buffer("channel_std", torch.as_tensor(std, dtype=torch.float64))
 
-    def _newtons(self, volts):
-        c = self.calibration
-        supply = c.get("supply_v", 3.3)
-        v = torch.clamp(volts, 0.0, supply * (1 - 1e-9))
-        resistance = c.get("divider_resistor_ohm", 1e4) * (supply - v) / torch.clamp(v, min=1e-12)
-        effective = (c.get("fsr_resistance_1n_ohm", 1e4) / resistance) ** (1.0 / c.get("fsr_exponent", 0.9))
-        saturation = c.get("fsr_saturation_n", 22.0)
-        ratio = torch.clamp(effective / saturation, max=1 - 1e-6)
-        force = torch.clamp(effective / (1.0 - ratio ** 4) ** 0.25, max=3 * saturation)
-        return torch.where(v > 0, force, torch.zeros_like(force))
-
     def forward(self, window):
         x = window.double()
-        if self.calibration:
-            k = self.calibration["index"]
-            x = torch.cat([x[:, :k], self._newtons(x[:, k:k + 1]), x[:, k + 1:]], dim=1)
-        if self.decimate > 1:  # block means in float64 (onnxruntime has no double AveragePool)
-            steps = x.shape[-1] // self.decimate
-            x = x[..., :steps * self.decimate].unflatten(-1, (steps, self.decimate)).mean(dim=-1)
+        k = self.calibrated_channel
+        if k is not None:
+            x = torch.cat([x[:, :k], self.calibration(x[:, k:k + 1]), x[:, k + 1:]], dim=1)
+        x = decimate(x, self.decimate)  # block means in float64 (onnxruntime has no double AveragePool)
         x = ((x - self.channel_mean) / self.channel_std).float()
         return torch.softmax(self.net(x), dim=1)
 

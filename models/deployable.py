@@ -13,7 +13,7 @@ import numpy as np
 
 from data.atomic import atomic_write
 from data.features import compute_features, enabled_groups
-from data.fingertip import fsr_force_n
+from data.physics.force_sensing_resistor import CALIBRATION_KEYS, calibrated_channel_name, fsr_force_n
 from data.windows import decimate
 
 
@@ -62,7 +62,7 @@ class TimeSeriesPipeline:
     def preprocess(self, windows) -> np.ndarray:
         x = np.asarray(windows, dtype=np.float64).copy()
         if self.force_calibration:
-            calibration = {k: v for k, v in self.force_calibration.items() if k not in ("channel", "index", "renamed")}
+            calibration = {k: v for k, v in self.force_calibration.items() if k in CALIBRATION_KEYS}
             k = self.force_calibration["index"]
             x[:, k] = fsr_force_n(x[:, k], **calibration)
         x = decimate(x, self.decimate)
@@ -85,7 +85,7 @@ def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:
     if datamodule.force_calibration:
         calibration = dict(datamodule.force_calibration)
         calibration["index"] = datamodule.recordings.channel_names.index(
-            calibration.get("renamed", calibration["channel"].rsplit("_", 1)[0] + "_n"))
+            calibrated_channel_name(calibration["channel"], calibration.get("renamed")))
     raw_names = list(datamodule.recordings.channel_names)
     if calibration:
         raw_names[calibration["index"]] = calibration["channel"]

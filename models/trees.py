@@ -37,7 +37,7 @@ class TreeRegressor(BaseEstimator, RegressorMixin):
             return ExtraTreesRegressor(n_estimators=self.n_estimators, n_jobs=self.n_jobs, **common)
         raise InputError(f"model.kind must be one of {', '.join(KINDS)}, got '{self.kind}'")
 
-    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
         base = self._base()
         y = np.asarray(y)
         if y.ndim == 2 and y.shape[1] == 1:

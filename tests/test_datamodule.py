@@ -1,10 +1,11 @@
 import numpy as np
 import pytest
 
-from data.datamodule import RegressionDataModule, from_table
+from data.splits import kfold_indices
+from data.regression_datamodule import RegressionDataModule, from_table
 from data.errors import InputError
 from data.features import FEATURE_GROUPS
-from data.rubber12 import Rubber12Scene
+from data.scenes.rubber12 import Rubber12Scene
 
 ALL = {g: True for g in FEATURE_GROUPS}
 CHANNELS = [f"r_{k:02d}_ohm" for k in range(1, 13)]
@@ -46,14 +47,24 @@ def test_scaler_is_fitted_on_training_rows_only(scene_table):
     np.testing.assert_array_equal(y_train, scene_table.targets[dm.train_idx])  # targets stay in units
 
 
-def test_folds_cover_the_training_split_and_are_grouped_when_asked(scene_table):
-    dm = RegressionDataModule(Fixed(scene_table), ALL, split="grouped", n_folds=4, seed=0).setup()
-    folds = dm.folds()
-    assert len(folds) == 4
+def test_grouped_folds_cover_the_rows_and_keep_each_group_in_one_fold(scene_table):
+    groups = scene_table.groups
+    folds, warning = kfold_indices(len(groups), 4, seed=0, groups=groups)
+    assert len(folds) == 4 and warning is None
     held = np.concatenate([h for _, h in folds])
-    assert sorted(held) == sorted(dm.train_idx)
+    assert sorted(held) == list(range(len(groups)))
     for fit, hold in folds:
-        assert not set(scene_table.groups[fit]) & set(scene_table.groups[hold])
+        assert not set(groups[fit]) & set(groups[hold])
+
+
+def test_grouped_folds_never_fall_back_to_ungrouped_ones():
+    groups = np.repeat([0, 1, 2], 10)
+    folds, warning = kfold_indices(30, 5, seed=0, groups=groups)
+    assert len(folds) == 3 and "only 3 groups" in warning
+    for fit, hold in folds:
+        assert np.unique(groups[hold]).size == 1 and not set(groups[fit]) & set(groups[hold])
+    with pytest.raises(InputError, match="at least two groups"):
+        kfold_indices(30, 5, seed=0, groups=np.zeros(30))
 
 
 def test_same_seed_same_split(scene_table):

@@ -11,11 +11,11 @@ import pandas as pd
 import pytest
 
 from conftest import tiny
-from data.fingertip import FingertipScene
+from data.scenes.fingertip import FingertipScene
 from export.run_export import export_run
-from export.runtime import OnnxPredictor
+from export.onnx_predictor import OnnxPredictor
 from models.deployable import load_pipeline
-from models.run import run
+from models.runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 REGRESSORS = ["resmlp", "random_forest", "extra_trees", "decision_tree", "blend"]

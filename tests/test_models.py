@@ -4,7 +4,8 @@ import pytest
 from sklearn.base import clone
 
 from data.errors import InputError
-from models.resmlp import ResMLP, ResMLPRegressor
+from models.nets.resmlp import ResMLP
+from models.resmlp_regressor import ResMLPRegressor
 from models.trees import TreeRegressor
 
 

@@ -16,8 +16,8 @@ from hypothesis.extra.numpy import arrays
 from data.errors import InputError
 from data.features import FEATURE_GROUPS, compute_features
 from data.virtual_force_levels import virtual_force_levels
-from models.metrics import regression_metrics
-from models.selection import validation_weights
+from models.report.metrics import regression_metrics
+from models.weighted_blend import validation_weights
 from models.uncertainty import conformal_quantile, normalised_scores
 
 ALL = list(FEATURE_GROUPS)

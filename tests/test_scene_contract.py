@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-import data.rubber12 as rubber12
-from data.conduction import PatchUpdateSolver
+import data.scenes.rubber12 as rubber12
+from data.physics.sheet_conduction import PatchUpdateSolver
 from data.errors import InputError
-from data.rubber12 import Rubber12Scene
-from data.rubber12_effects import EFFECTS
+from data.scenes.rubber12 import Rubber12Scene
+from data.scenes.rubber12_effects import EFFECTS
 
 SCENES = Path(__file__).resolve().parents[1] / "configs" / "scene"
 DEFAULT_EFFECTS = OmegaConf.to_container(OmegaConf.load(SCENES / "rubber12.yaml").effects)
@@ -59,8 +59,8 @@ def test_no_effects_means_no_response():
 
 @pytest.mark.parametrize("effects, message", [
     ({"contact": {}, "humidity": {}}, "scene rubber12: unknown effect 'humidity'; valid effects: adc, contact"),
-    ({"percolation": {}}, "effect 'percolation' needs 'contact' listed before it"),
-    ({"contact": {}, "outlier_rejection": {}}, "effect 'outlier_rejection' needs 'adc' listed before it"),
+    ({"percolation": {}}, "effect 'percolation' needs 'contact' listed too"),
+    ({"contact": {}, "outlier_rejection": {}}, "effect 'outlier_rejection' needs 'adc' listed too"),
 ])
 def test_effect_errors_name_the_scene_and_what_is_valid(effects, message):
     with pytest.raises(InputError, match=message):

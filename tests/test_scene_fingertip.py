@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-from data.boards import TEXTURES
+from data.scenes.fingertip_boards import TEXTURES
 from data.errors import InputError
-from data.fingertip import FingertipScene
+from data.scenes.fingertip import FingertipScene
 
 FULL = OmegaConf.to_container(OmegaConf.load(Path(__file__).resolve().parents[1] / "configs/scene/fingertip.yaml").effects)
 

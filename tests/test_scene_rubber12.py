@@ -3,9 +3,9 @@ local where it must be, and reproducible."""
 import numpy as np
 import pytest
 
-from data.contact import flat_punch_force_n
+from data.physics.contact_mechanics import flat_punch_force_n
 from data.errors import InputError
-from data.rubber12 import Rubber12Scene
+from data.scenes.rubber12 import Rubber12Scene
 
 from pathlib import Path
 

@@ -4,9 +4,9 @@ import pytest
 from sklearn.base import BaseEstimator, RegressorMixin
 
 from data.errors import InputError
-from models.analysis import identifiability_map
-from models.blend import KFoldBlend
-from models.selection import ValidationWeightedBlend, validation_weights
+from models.report.analysis import identifiability_map
+from models.kfold_blend import KFoldBlend
+from models.weighted_blend import ValidationWeightedBlend, validation_weights
 from models.trees import TreeRegressor
 from models.uncertainty import conformal_quantile, coverage, normalised_scores
 
@@ -16,7 +16,7 @@ class Constant(BaseEstimator, RegressorMixin):
     def __init__(self, value=0.0):
         self.value = value
 
-    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
         self.n_outputs_ = np.asarray(y).reshape(len(y), -1).shape[1]
         return self
 
@@ -85,12 +85,22 @@ def test_kfold_blend_averages_its_fold_models_and_keeps_out_of_fold_residuals():
     np.testing.assert_allclose(blend.data_variance_, ((y[:400] - blend.out_of_fold_) ** 2).mean(axis=0))
 
 
+class RecordRows(Constant):
+    """Remembers which rows it was fitted on (column 0 holds the row number)."""
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
+        self.rows_ = np.asarray(X)[:, 0].astype(int)
+        return super().fit(X, y)
+
+
 def test_grouped_kfold_keeps_groups_together():
     X, y = data(200)
+    X[:, 0] = np.arange(len(X))
     groups = np.repeat(np.arange(40), 5)
-    blend = KFoldBlend(Constant(), n_folds=4, progress=False)
-    for fit_rows, held_rows in blend._folds(len(X), groups):
-        assert not set(groups[fit_rows]) & set(groups[held_rows])
+    blend = KFoldBlend(RecordRows(), n_folds=4, progress=False).fit(X, y, groups=groups)
+    assert blend.fold_warning_ is None and len(blend.models_) == 4
+    for model in blend.models_:  # each fold model saw whole groups only
+        unseen = np.setdiff1d(np.arange(len(X)), model.rows_)
+        assert not set(groups[model.rows_]) & set(groups[unseen])
 
 
 def test_conformal_quantile_matches_the_gaussian_and_refuses_tiny_sets():

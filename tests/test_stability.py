@@ -7,10 +7,10 @@ import numpy as np
 import pytest
 
 from data.errors import InputError
-from data.rubber12 import Rubber12Scene
-from models.classifier import TimeSeriesClassifier
-from models.prcnn import PRCNN
-from models.resmlp import ResMLPRegressor
+from data.scenes.rubber12 import Rubber12Scene
+from models.timeseries_classifier import TimeSeriesClassifier
+from models.nets.prcnn import PRCNN
+from models.resmlp_regressor import ResMLPRegressor
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -4,7 +4,8 @@ import pandas as pd
 import pytest
 
 from data.errors import InputError
-from data.fingertip import FingertipScene, fsr_force_n
+from data.physics.force_sensing_resistor import fsr_force_n
+from data.scenes.fingertip import FingertipScene
 from data.recording_files import load_long_table, load_npz
 from data.timeseries_datamodule import TimeSeriesDataModule
 from data.virtual_force_levels import virtual_force_levels
@@ -140,7 +141,7 @@ def test_algorithm_1_degenerate_cases_are_defined():
 
 
 def test_users_npz_trains_through_hydra(compose_config, tmp_path):
-    from models.run import run
+    from models.runs.run import run
     rng = np.random.default_rng(0)
     t = np.arange(200) / 50.0
     X = np.stack([np.stack([np.sin(2 * np.pi * f * t) + 0.3 * rng.standard_normal(200),

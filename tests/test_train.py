@@ -11,7 +11,7 @@ import pytest
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
 from conftest import tiny
-from models.run import run
+from models.runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 CLASSIFIERS = {"prcnn", "rescnn", "inceptiontime", "lstm_fcn"}  # tested in test_tsc_models.py
@@ -68,7 +68,7 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
 
 
 def test_a_users_table_runs_like_a_scene(compose_config, tmp_path):
-    from data.rubber12 import Rubber12Scene
+    from data.scenes.rubber12 import Rubber12Scene
     table = Rubber12Scene(n_samples=120, grid_nodes=21, progress=False,
                           effects={"contact": {}, "percolation": {}, "adc": {}}).generate()
     path = tmp_path / "rig.parquet"

@@ -1,0 +1,1 @@
+"""Physical models shared by sensors: sheet current flow, contact mechanics, force-sensing resistors."""

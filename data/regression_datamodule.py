@@ -1,0 +1,94 @@
+"""One datamodule for torch nets and scikit-learn trees alike.
+
+    source (a scene or a user's table) -> SensorTable -> physics features -> splits -> scaling
+
+A held-out test split (15 % by default) is never touched in training or selection; an
+optional calibration split (for conformal intervals) and a validation split come out of the
+rest.
+Features are standardised with statistics from the training split only. Targets stay in
+physical units here: a net standardises its own targets inside `fit` and reports back in
+units, so every model sees and returns the same arrays.
+"""
+import numpy as np
+from sklearn.preprocessing import StandardScaler
+
+from data.features import compute_features, feature_names
+from data.splits import holdout
+from data.errors import InputError
+from data.tables import SensorTable, TableSource
+
+
+class RegressionDataModule:
+    def __init__(self, source, features, split="random", test_fraction=0.15, val_fraction=0.15,
+                 calibration_fraction=0.0, n_folds=5, seed=0):
+        self.source = source
+        self.features = features
+        self.split = split
+        self.test_fraction = test_fraction
+        self.val_fraction = val_fraction
+        self.calibration_fraction = calibration_fraction
+        self.n_folds = n_folds
+        self.seed = seed
+
+    def setup(self) -> "RegressionDataModule":
+        table = self.source.load()
+        if not isinstance(table, SensorTable):
+            name = getattr(self.source, "name", type(self.source).__name__)
+            raise InputError(f"scene {name} produces time-series recordings, not one row per press; "
+                             "use data=timeseries (or experiment=materials10, textures13, combined18)")
+        self.table = table
+        self.channel_names = list(table.channel_columns)
+        self.target_names = list(table.target_columns)
+        self.feature_names = feature_names(self.channel_names, self.features)
+        self.y = table.targets
+
+        everything = np.arange(len(self.y))
+        rest, self.test_idx = holdout(everything, table.groups, self.test_fraction, self.split, self.seed)
+        # Calibration and validation are fractions of the whole set, taken from what is left.
+        left = 1.0 - self.test_fraction
+        self.cal_idx = np.array([], dtype=np.int64)
+        if self.calibration_fraction > 0:
+            rest, self.cal_idx = holdout(rest, table.groups, self.calibration_fraction / left, self.split, self.seed + 2)
+            left -= self.calibration_fraction
+        self.train_idx, self.val_idx = holdout(rest, table.groups, self.val_fraction / left, self.split, self.seed + 1)
+        self.X, self.scaler = self.features_for(self.features)
+        return self
+
+    def features_for(self, groups):
+        """Scaled features of every row for a choice of feature groups (used by the ablation):
+        the scaler is fitted on the training rows only."""
+        features = compute_features(self.table.channels, groups)
+        scaler = StandardScaler().fit(features[self.train_idx])
+        return scaler.transform(features), scaler
+
+    def _part(self, idx):
+        return self.X[idx], self.y[idx]
+
+    @property
+    def train(self):
+        return self._part(self.train_idx)
+
+    @property
+    def val(self):
+        return self._part(self.val_idx)
+
+    @property
+    def test(self):
+        return self._part(self.test_idx)
+
+    @property
+    def calibration(self):
+        """The calibration split, or the validation split when none was asked for."""
+        return self._part(self.cal_idx if self.cal_idx.size else self.val_idx)
+
+    def summary(self) -> dict:
+        return {"split": self.split, "n_train": int(self.train_idx.size), "n_val": int(self.val_idx.size),
+                "n_calibration": int(self.cal_idx.size), "n_test": int(self.test_idx.size), "n_features": len(self.feature_names),
+                "channels": self.channel_names, "targets": self.target_names,
+                "source": self.table.description}
+
+
+def from_table(path, channel_columns, target_columns, group_columns=None, **datamodule_options):
+    """`data=table`: a user's CSV/Parquet recording served by the same datamodule as a scene."""
+    source = TableSource(path, channel_columns, target_columns, group_columns)
+    return RegressionDataModule(source, **datamodule_options)

@@ -1,0 +1,86 @@
+"""What a run's predictions cost: latency at batch 1 and throughput at batch 1024, eager and in
+onnxruntime (one intra-op thread and its default), with the thread settings and core count.
+
+Measured in-process on the run's own raw test inputs, after warm-up, repeating calls until a
+time budget is spent (at least 5 calls; slow eager pipelines get fewer repetitions, recorded
+as `reps`). `record_costs` merges the figures into the run's metrics.json and TensorBoard.
+"""
+import json
+import logging
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+import torch
+
+from data.atomic import atomic_write_json
+from export.onnx_predictor import OnnxPredictor
+from models.deployable import RegressionPipeline, load_pipeline
+
+log = logging.getLogger(__name__)
+
+
+def latency_us(call, sample, budget_s: float = 1.0, min_reps: int = 5, max_reps: int = 500) -> dict:
+    for _ in range(2):
+        call(sample)
+    times, spent = [], 0.0
+    while len(times) < max_reps and (len(times) < min_reps or spent < budget_s):
+        start = time.perf_counter()
+        call(sample)
+        times.append(time.perf_counter() - start)
+        spent += times[-1]
+    return {"p50": 1e6 * float(np.percentile(times, 50)), "p99": 1e6 * float(np.percentile(times, 99)), "reps": len(times)}
+
+
+def throughput_per_s(call, batch, budget_s: float = 1.0) -> float:
+    call(batch)
+    count, start = 0, time.perf_counter()
+    while count == 0 or time.perf_counter() - start < budget_s:
+        call(batch)
+        count += 1
+    return count * len(batch) / (time.perf_counter() - start)
+
+
+def measure(pipeline, model_path=None, budget_s: float = 1.0) -> dict:
+    if pipeline.examples is None or len(pipeline.examples) == 0:
+        return {}
+    batch = np.resize(pipeline.examples, (1024,) + pipeline.examples.shape[1:])
+    one = batch[:1]
+    runners = {"eager": pipeline.predict_raw}
+    if model_path is not None and Path(model_path).is_file():
+        for name, threads in (("onnx_1_thread", 1), ("onnx_default", None)):
+            predictor = OnnxPredictor(model_path, threads=threads)
+            runners[name] = predictor.predict_array if isinstance(pipeline, RegressionPipeline) else predictor.predict_windows
+    cost = {"cores": os.cpu_count(), "torch_threads": torch.get_num_threads(),
+            "onnx_threads": {"onnx_1_thread": 1, "onnx_default": "onnxruntime default (all cores)"},
+            "latency_batch1_us": {}, "throughput_batch1024_per_s": {}}
+    for name, call in runners.items():
+        cost["latency_batch1_us"][name] = latency_us(call, one, budget_s)
+        cost["throughput_batch1024_per_s"][name] = throughput_per_s(call, batch, budget_s)
+    if model_path is not None and Path(model_path).is_file():
+        cost["model_size_bytes"] = Path(model_path).stat().st_size
+    return cost
+
+
+def record_costs(run_dir, model_file: str = "model.onnx", budget_s: float = 1.0) -> dict:
+    """Measure a finished run's inference costs and merge them into metrics.json and TensorBoard."""
+    run_dir = Path(run_dir)
+    cost = measure(load_pipeline(run_dir / "pipeline.pkl"), run_dir / model_file, budget_s)
+    metrics = json.loads((run_dir / "metrics.json").read_text())
+    metrics.setdefault("cost", {}).update(cost)
+    atomic_write_json(run_dir / "metrics.json", metrics)
+    from torch.utils.tensorboard import SummaryWriter
+    with SummaryWriter(log_dir=str(run_dir / "tensorboard")) as writer:
+        for name, values in cost.get("latency_batch1_us", {}).items():
+            writer.add_scalar(f"cost/latency_p50_us/{name}", values["p50"])
+            writer.add_scalar(f"cost/latency_p99_us/{name}", values["p99"])
+        for name, value in cost.get("throughput_batch1024_per_s", {}).items():
+            writer.add_scalar(f"cost/throughput_per_s/{name}", value)
+        if "model_size_bytes" in cost:
+            writer.add_scalar("cost/model_size_bytes", cost["model_size_bytes"])
+    latency = cost.get("latency_batch1_us", {})
+    log.info("cost: fit %.2f s wall, %.2f s CPU; batch-1 latency p50 %s; %d cores",
+             metrics["cost"].get("fit_time_s", float("nan")), metrics["cost"].get("fit_cpu_time_s", float("nan")),
+             ", ".join(f"{k} {v['p50']:,.0f} us" for k, v in latency.items()), cost.get("cores", 0))
+    return metrics

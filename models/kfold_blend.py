@@ -1,0 +1,89 @@
+"""K-fold blending (seed eq. 17): K copies of a model, each trained on K - 1 folds of the
+training data, averaged at prediction time.
+
+Works for any estimator of the contract. Nets early-stop on the fold they did not see.
+The fold models' spread gives the model uncertainty sigma_model (eq. 21); the out-of-fold
+residuals give the data noise sigma_data (eq. 22, one variance per target); the total is
+sigma_total = sqrt(sigma_model^2 + sigma_data^2) (eq. 23-24). Classifiers average
+probabilities.
+"""
+import logging
+import time
+
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin, clone
+from tqdm.auto import tqdm
+
+from data.splits import kfold_indices
+from models.uncertainty import IntervalMixin
+
+log = logging.getLogger(__name__)
+
+
+class KFoldBlend(IntervalMixin, BaseEstimator, RegressorMixin):
+    def __init__(self, estimator=None, n_folds=5, seed=0, progress=True):
+        self.estimator = estimator
+        self.n_folds = n_folds
+        self.seed = seed
+        self.progress = progress
+
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
+        X, y = np.asarray(X), np.asarray(y, dtype=np.float64)
+        y2 = y.reshape(len(y), -1)
+        self.models_, self.fold_fit_time_s_, self.fold_fit_cpu_time_s_ = [], [], []
+        out_of_fold = np.zeros_like(y2)
+        folds, self.fold_warning_ = kfold_indices(len(X), self.n_folds, self.seed, groups)
+        if self.fold_warning_:
+            log.warning(self.fold_warning_)
+        for k, (fit_rows, held_rows) in enumerate(tqdm(folds, desc="k-fold", disable=not self.progress, leave=False)):
+            model = clone(self.estimator)
+            if "seed" in model.get_params():
+                model.set_params(seed=self.seed + k)
+            start, cpu_start = time.perf_counter(), time.process_time()
+            # Each fold model early-stops (if it can) on the fold it was not trained on.
+            model.fit(X[fit_rows], y[fit_rows], X[held_rows], y[held_rows],
+                      epoch_callback=epoch_callback if k == 0 else None)
+            self.fold_fit_time_s_.append(time.perf_counter() - start)
+            self.fold_fit_cpu_time_s_.append(time.process_time() - cpu_start)
+            if hasattr(model, "predict_proba"):
+                out_of_fold = None
+            else:
+                out_of_fold[held_rows] = model.predict(X[held_rows]).reshape(len(held_rows), -1)
+            self.models_.append(model)
+        if out_of_fold is not None:
+            self.out_of_fold_ = out_of_fold
+            self.data_variance_ = ((y2 - out_of_fold) ** 2).mean(axis=0)
+        self.n_features_in_ = X.shape[1]
+        self.single_output_ = y.ndim == 1
+        return self
+
+    def _fold_predictions(self, X) -> np.ndarray:
+        return np.stack([m.predict(X).reshape(len(X), -1) for m in self.models_])
+
+    def predict(self, X):
+        mean = self._fold_predictions(X).mean(axis=0)
+        return mean[:, 0] if self.single_output_ else mean
+
+    def predict_proba(self, X):
+        return np.mean([m.predict_proba(X) for m in self.models_], axis=0)
+
+    def predict_components(self, X):
+        """(mean, model variance, data variance) per row and target (eq. 21-22)."""
+        folds = self._fold_predictions(X)
+        model_variance = folds.var(axis=0, ddof=1)
+        return folds.mean(axis=0), model_variance, np.broadcast_to(self.data_variance_, model_variance.shape)
+
+    def predict_std(self, X):
+        """(mean, sigma_total) per row and target (eq. 23-24)."""
+        mean, model_variance, data_variance = self.predict_components(X)
+        return mean, np.sqrt(model_variance + data_variance)
+
+    def feature_importances(self):
+        """Mean impurity importances over the fold models (trees only), or None."""
+        values = [m.feature_importances() for m in self.models_ if hasattr(m, "feature_importances")]
+        values = [v for v in values if v is not None]
+        return np.mean(values, axis=0) if values else None
+
+    @property
+    def n_parameters_(self) -> int:
+        return sum(getattr(m, "n_parameters_", 0) for m in self.models_)

@@ -1,0 +1,143 @@
+"""The seed's residual MLP (models/nets/resmlp.py) behind the estimator contract.
+
+Training: Adam (lr 1e-3) on MSE + l1 * sum|W| + l2 * sum W^2 over the Linear weights (Keras-style
+kernel regularisers, as in the seed), learning rate halved when validation loss plateaus,
+early stopping on validation loss with the best weights restored. A plain PyTorch loop,
+deterministic under `seed`. Inputs and targets are standardised inside `fit` with the training
+rows' statistics (so GaussianNoise(0.02) means 2 % of a feature's spread whatever its scale: on
+inputs of scale 1e-6 it would otherwise drown the signal) and predictions come back in the
+units of y.
+"""
+import copy
+import math
+
+import numpy as np
+import torch
+from sklearn.base import BaseEstimator, RegressorMixin
+from torch import nn
+from tqdm.auto import tqdm
+
+from data.errors import InputError
+from models.nets.resmlp import ResMLP
+from models.torch_runtime import count_parameters, flush_denormals, resolve_device
+
+
+class ResMLPRegressor(BaseEstimator, RegressorMixin):
+    def __init__(self, widths=(256, 128, 96, 64), dropouts=(0.40, 0.35, 0.30, 0.25), noise_std=0.02,
+                 lr=1e-3, l1=1e-5, l2=1e-4, batch_size=32, max_epochs=300, early_stopping_patience=30,
+                 lr_plateau_patience=10, lr_factor=0.5, val_fraction=0.15, device="cpu", seed=0,
+                 progress=True):
+        self.widths = widths
+        self.dropouts = dropouts
+        self.noise_std = noise_std
+        self.lr = lr
+        self.l1 = l1
+        self.l2 = l2
+        self.batch_size = batch_size
+        self.max_epochs = max_epochs
+        self.early_stopping_patience = early_stopping_patience
+        self.lr_plateau_patience = lr_plateau_patience
+        self.lr_factor = lr_factor
+        self.val_fraction = val_fraction
+        self.device = device
+        self.seed = seed
+        self.progress = progress
+
+    # -- helpers ----------------------------------------------------------------------------
+    def _tensor(self, a):
+        return torch.as_tensor(np.asarray(a, dtype=np.float32), device=self.device_)
+
+    def _inputs(self, X):
+        return self._tensor((np.asarray(X, dtype=np.float64) - self.feature_mean_) / self.feature_scale_)
+
+    def _penalty(self):
+        weights = [m.weight for m in self.module_.modules() if isinstance(m, nn.Linear)]
+        return (self.l1 * sum(w.abs().sum() for w in weights)
+                + self.l2 * sum((w * w).sum() for w in weights))
+
+    def _mse(self, X, y):
+        self.module_.eval()
+        with torch.no_grad():
+            return float(torch.mean((self.module_(X) - y) ** 2))
+
+    # -- contract ---------------------------------------------------------------------------
+    @flush_denormals()
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
+        torch.manual_seed(self.seed)
+        X = np.asarray(X, dtype=np.float64)
+        y = np.asarray(y, dtype=np.float64).reshape(len(X), -1)
+        if X_val is None:  # no validation split given: carve one, seeded, for early stopping
+            order = np.random.default_rng(self.seed).permutation(len(X))
+            n_val = max(1, int(round(self.val_fraction * len(X))))
+            X, y, X_val, y_val = X[order[n_val:]], y[order[n_val:]], X[order[:n_val]], y[order[:n_val]]
+        y_val = np.asarray(y_val, dtype=np.float64).reshape(len(X_val), -1)
+
+        self.device_ = resolve_device(self.device)
+        self.n_features_in_ = X.shape[1]
+        self.feature_mean_ = X.mean(axis=0)
+        self.feature_scale_ = np.where(X.std(axis=0) > 0, X.std(axis=0), 1.0)
+        self.target_mean_ = y.mean(axis=0)
+        self.target_scale_ = np.where(y.std(axis=0) > 0, y.std(axis=0), 1.0)
+        if not (np.isfinite(self.feature_scale_).all() and np.isfinite(self.target_scale_).all()):
+            raise InputError("resmlp: inputs or targets are too large to standardise (overflow); rescale them")
+        self.module_ = ResMLP(X.shape[1], y.shape[1], tuple(self.widths), tuple(self.dropouts),
+                              self.noise_std).to(self.device_)
+        Xt, yt = self._inputs(X), self._tensor((y - self.target_mean_) / self.target_scale_)
+        Xv, yv = self._inputs(X_val), self._tensor((y_val - self.target_mean_) / self.target_scale_)
+
+        optimiser = torch.optim.Adam(self.module_.parameters(), lr=self.lr)
+        plateau = torch.optim.lr_scheduler.ReduceLROnPlateau(
+            optimiser, factor=self.lr_factor, patience=self.lr_plateau_patience)
+        generator = torch.Generator().manual_seed(self.seed)
+        best_loss, best_state, waited = math.inf, None, 0
+        self.history_ = []
+        bar = tqdm(range(self.max_epochs), desc="resmlp", unit="epoch", disable=not self.progress, leave=False)
+        for epoch in bar:
+            self.module_.train()
+            order = torch.randperm(len(Xt), generator=generator).to(self.device_)
+            total, seen = 0.0, 0
+            for start in range(0, len(order), self.batch_size):
+                batch = order[start:start + self.batch_size]
+                if len(batch) < 2:  # BatchNorm cannot normalise a batch of one in training
+                    continue
+                loss = torch.mean((self.module_(Xt[batch]) - yt[batch]) ** 2) + self._penalty()
+                optimiser.zero_grad()
+                loss.backward()
+                optimiser.step()
+                total, seen = total + loss.item() * len(batch), seen + len(batch)
+            train_loss = total / max(seen, 1)
+            val_loss = self._mse(Xv, yv)
+            if not (math.isfinite(train_loss) and math.isfinite(val_loss)):
+                raise InputError(f"resmlp: training diverged at epoch {epoch + 1} (loss is "
+                                 f"{train_loss if not math.isfinite(train_loss) else val_loss}); "
+                                 "check the inputs' scale or lower model.lr")
+            lr = optimiser.param_groups[0]["lr"]
+            record = {"epoch": epoch + 1, "train_loss": train_loss, "val_loss": val_loss, "lr": lr}
+            self.history_.append(record)
+            if epoch_callback is not None:
+                epoch_callback(record)
+            bar.set_postfix(train=f"{train_loss:.4f}", val=f"{val_loss:.4f}", lr=f"{lr:.1e}")
+            plateau.step(val_loss)
+            if val_loss < best_loss:
+                best_loss, waited = val_loss, 0
+                best_state = copy.deepcopy(self.module_.state_dict())
+            else:
+                waited += 1
+                if waited >= self.early_stopping_patience:
+                    break
+        bar.close()
+        self.module_.load_state_dict(best_state)
+        self.module_.eval()
+        self.best_val_loss_ = best_loss
+        self.n_epochs_ = len(self.history_)
+        return self
+
+    def predict(self, X):
+        self.module_.eval()
+        with torch.no_grad():
+            out = self.module_(self._inputs(X)).cpu().numpy().astype(np.float64)
+        return out * self.target_scale_ + self.target_mean_
+
+    @property
+    def n_parameters_(self) -> int:
+        return count_parameters(self.module_)

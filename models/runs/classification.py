@@ -1,0 +1,58 @@
+"""One classification run on time-series windows, top to bottom: fit, predict, score -> one
+result; then the report side (models/report/classification_report.py) writes it once.
+
+Reports what the seed paper reports (accuracy, validation loss, parameter count) plus macro-F1,
+per-class accuracy, accuracy per validation force level, fit time, a confusion matrix (PNG and
+TensorBoard) and per-epoch curves.
+"""
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from hydra.utils import instantiate
+
+from models.deployable import TimeSeriesPipeline, timeseries_pipeline
+from models.report.classification_report import write_classification_report
+from models.report.metrics import classification_metrics
+
+
+@dataclass
+class ClassificationResult:
+    metrics: dict
+    classes: list[str]
+    y_val: np.ndarray
+    proba_val: np.ndarray
+    val_window_recording: np.ndarray
+    val_levels: np.ndarray | None
+    pipeline: TimeSeriesPipeline
+    hparams: dict
+
+
+def fit_and_evaluate(cfg, datamodule, epoch_callback=None) -> ClassificationResult:
+    (X_train, y_train), (X_val, y_val) = datamodule.train, datamodule.val
+    summary = datamodule.summary()
+    model = instantiate(cfg.model)
+    if "modalities" in model.get_params():
+        model.set_params(modalities=datamodule.modality_channels)
+    start, cpu_start = time.perf_counter(), time.process_time()
+    model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback)
+    fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
+    proba = model.predict_proba(X_val)
+    name = type(model.module_).__name__ if hasattr(model, "module_") else type(model).__name__
+    n_parameters = int(getattr(model, "n_parameters_", 0))
+    metrics = {"model": name, "n_parameters": n_parameters, "fit_time_s": fit_time_s,
+               "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, "n_parameters": n_parameters},
+               "val": classification_metrics(y_val, proba, datamodule.classes, datamodule.val_levels_per_window),
+               "data": summary}
+    hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed,
+               "augment": bool(datamodule.n_virtual_windows), "window": str(summary["window"])}
+    return ClassificationResult(metrics, list(datamodule.classes), y_val, proba, datamodule.val_window_recording,
+                                datamodule.val_levels_per_window, timeseries_pipeline(datamodule, model), hparams)
+
+
+def run_classification(cfg, output_dir, datamodule) -> dict:
+    with instantiate(cfg.logger, log_dir=str(Path(output_dir) / "tensorboard")) as logger:
+        result = fit_and_evaluate(cfg, datamodule, logger.log_epoch)
+        write_classification_report(result, output_dir, logger)
+    return result.metrics

@@ -1,0 +1,28 @@
+"""A Touchstone run: seed everything, set up the datamodule, and hand over to the pipeline of its
+task (regression on tabular presses, or classification of time-series windows).
+
+train.py calls `run(cfg, output_dir)`; tests call it too with a composed config and a tmp_path.
+"""
+import random
+from pathlib import Path
+
+import numpy as np
+import torch
+from hydra.utils import instantiate
+from omegaconf import DictConfig
+
+from models.runs.classification import run_classification
+from models.runs.regression import run_regression
+
+
+def seed_everything(seed: int) -> None:
+    random.seed(seed)
+    np.random.seed(seed)
+    torch.manual_seed(seed)
+
+
+def run(cfg: DictConfig, output_dir: str | Path) -> dict:
+    seed_everything(cfg.seed)
+    datamodule = instantiate(cfg.data).setup()
+    pipeline = run_classification if getattr(datamodule, "task", "regression") == "classification" else run_regression
+    return pipeline(cfg, output_dir, datamodule)
