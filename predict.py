@@ -1,6 +1,6 @@
 """Predict with an exported Touchstone model, no training code needed:
 
-    python predict.py model=outputs/<run>/model.onnx input=recording.csv output=pred.csv
+    python predict.py model=outputs/<run>/model.onnx input=recording.csv output=pred.csv [threads=N]
 
 Regression models read one row per press with the model's channel columns and write the
 targets (units in the column names) and, when the model has them, 95 % interval bounds.
@@ -32,10 +32,17 @@ def parse(argv) -> dict:
     return args
 
 
+def thread_count(text: str) -> int | None:
+    """`threads=N`: N intra-op threads for onnxruntime; 0 (or no argument) keeps its default."""
+    if not (text.isascii() and text.isdigit()):  # digits only: no sign, no decimal point, not empty
+        raise InputError(f"threads must be a non-negative integer (0 = onnxruntime's default), got {text!r}")
+    return int(text) or None
+
+
 def main(argv=None) -> int:
     try:
         args = parse(sys.argv[1:] if argv is None else argv)
-        predictor = OnnxPredictor(args["model"], threads=int(args.get("threads", 0)) or None)
+        predictor = OnnxPredictor(args["model"], threads=thread_count(args.get("threads", "0")))
         frame = read_table_file(args["input"])
         if predictor.kind == "regression":
             result = predictor.predict_table(frame, args["input"])

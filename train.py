@@ -5,6 +5,7 @@ ONNX file, and a user-input problem ends in one line on stderr and exit code 2 i
 traceback.
 """
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -12,6 +13,7 @@ from pathlib import Path
 # shadow a user's own): the repo root is the import root. Jobs that a launcher starts in other
 # processes (submitit, joblib) inherit it through PYTHONPATH.
 ROOT = Path(__file__).resolve().parent
+STAGE = ".staging"
 os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
 
 import hydra
@@ -29,20 +31,32 @@ from models.runs.run import run
 
 @hydra.main(version_base="1.3", config_path="configs", config_name="config")
 def main(cfg: DictConfig) -> float:
-    output_dir = HydraConfig.get().runtime.output_dir
+    output_dir = Path(HydraConfig.get().runtime.output_dir)
+    # Stage every artefact in a hidden folder and move it into place only when the whole run
+    # (training, report, export, cost) succeeded: a failed run leaves its log, its .hydra/ and
+    # error.txt, never a metrics.json or a model that looks finished.
+    stage = output_dir / STAGE
+    shutil.rmtree(stage, ignore_errors=True)
     try:
-        metrics = run(cfg, output_dir)
+        metrics = run(cfg, stage)
         if cfg.export.enabled:
-            export_run(output_dir, cfg.export.opset, cfg.export.file)
+            export_run(stage, cfg.export.opset, cfg.export.file)
         if cfg.cost.measure_latency:
-            metrics = record_costs(output_dir, cfg.export.file, cfg.cost.budget_s)
-    except InputError as error:
+            metrics = record_costs(stage, cfg.export.file, cfg.cost.budget_s)
+        for item in sorted(stage.iterdir()):
+            os.replace(item, output_dir / item.name)
+        stage.rmdir()
+    except BaseException as error:
+        shutil.rmtree(stage, ignore_errors=True)
+        message = str(error).splitlines()[0] if str(error) else type(error).__name__
+        atomic_write_text(output_dir / "error.txt", f"{message}\n")
+        if not isinstance(error, InputError):
+            raise
         print(f"error: {error}", file=sys.stderr)
         if HydraConfig.get().mode == RunMode.MULTIRUN:  # one bad job must not end the sweep
-            atomic_write_text(f"{output_dir}/error.txt", f"{error}\n")
             return float("nan")
         sys.exit(2)
-    val = metrics["val"]  # the value a Hydra sweeper would optimise
+    val = metrics["val"]  # the value a Hydra sweeper would optimise: validation, never test
     return val["average"]["r2"] if "average" in val else val["accuracy"]
 
 

@@ -7,7 +7,7 @@ Groups, in this order (c = number of channels; 12 for rubber12):
   zscore         (r_i - mean) / (std + 1e-8)          c   (per sample, across channels)
   stats          mean, std, skew, kurtosis            4   (per sample, across channels)
   pair_products  r_i * r_{i+1}                        c-1 (neighbouring channels, i = 1..c-1)
-  pair_ratios    r_i / (r_{i+1} + 1e-8)               c-1
+  pair_ratios    r_i / (|r_{i+1}| + eps)              c-1 (eps: see below)
 For 12 channels with every group on that is 4*12 + 4 + 2*11 = 74 features. (The paper says 49
 but its own list does not add up to 49; this is the list it describes.)
 
@@ -16,6 +16,15 @@ moment and the *excess* fourth moment, in closed form (scipy.stats is ~50x slowe
 sample). For a sample whose channels are all equal (to float64 rounding: std <= 1e-12 |mean|)
 they are undefined; we define both as 0, as are the z-scores and the std (rounding noise). Everything is computed in float64 and is finite for every finite
 non-negative input.
+
+Ratios: a fixed epsilon (1e-8) is no guard when channels are min-max normalised, since every
+channel is exactly 0 at its minimum and 1 / 1e-8 = 1e8 then swamps the scaler. The guard
+scales with the sample instead: eps = 1e-4 * sum_j |r_j|, the sample's total reading, floored
+at 1e-300 so an all-zero sample gives 0 / 1e-300 = 0. Hence |ratio| <= |r_i| / eps <= 1e4 for
+every finite sample, whatever the unit and the channel count; for 12 channels of similar size
+eps is 0.12 % of the mean reading, so ordinary ratios move by about 0.1 %. The denominator uses
+|r_{i+1}| so a slightly negative reading (raw ohms below the training minimum, once normalised)
+cannot cancel eps and divide by zero; for non-negative readings it is r_{i+1} itself.
 
 One implementation: the operators are a torch module (`PhysicsFeatures`), called on numpy
 arrays in training (`compute_features`) and on tensors inside the exported ONNX graph.
@@ -27,7 +36,8 @@ from torch import nn
 from data.errors import InputError
 
 FEATURE_GROUPS = ("raw", "log1p", "sqrt", "zscore", "stats", "pair_products", "pair_ratios")
-EPSILON = 1e-8
+EPSILON = 1e-8               # z-scores: (r - mean) / (std + EPSILON)
+RATIO_EPSILON = 1e-4         # pair ratios: eps = RATIO_EPSILON * sum_j |r_j|, so |ratio| <= 1 / RATIO_EPSILON
 
 
 def enabled_groups(groups) -> list[str]:
@@ -67,8 +77,9 @@ class PhysicsFeatures(nn.Module):
         # Small constants as float64 buffers keep their exact values (a Python scalar passes
         # through float32 in the ONNX exporter: 1e-12 became 9.99999996e-13).
         self.register_buffer("epsilon", torch.tensor(EPSILON, dtype=torch.float64))
+        self.register_buffer("ratio_epsilon", torch.tensor(RATIO_EPSILON, dtype=torch.float64))
         self.register_buffer("relative_floor", torch.tensor(1e-12, dtype=torch.float64))
-        self.register_buffer("tiny", torch.tensor(1e-300, dtype=torch.float64))
+        self.register_buffer("tiny", torch.tensor(1e-300, dtype=torch.float64))  # absolute floor of a scale
 
     def forward(self, r: torch.Tensor) -> torch.Tensor:
         r = r.double()
@@ -98,7 +109,8 @@ class PhysicsFeatures(nn.Module):
             elif group == "pair_products":
                 blocks.append(r[:, :-1] * r[:, 1:])
             else:
-                blocks.append(r[:, :-1] / (r[:, 1:] + self.epsilon))
+                guard = torch.maximum(self.ratio_epsilon * r.abs().sum(dim=1, keepdim=True), self.tiny)
+                blocks.append(r[:, :-1] / (r[:, 1:].abs() + guard))
         return torch.cat(blocks, dim=1)
 
 

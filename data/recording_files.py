@@ -1,8 +1,10 @@
 """Users' own time-series recordings: NPZ arrays or a long-format table, as a RecordingSet.
 
-NPZ: `X` of shape (n, channels, length), or an object array of per-recording (channels,
-length_i) arrays (cut to the shortest); `y` labels (n,); optional `force_level` (n,) in newtons
-and `channel_names` (channels,).
+NPZ: `X`, a numeric array of shape (n, channels, length) (recordings of different lengths: cut
+them to a common length before saving); `y` labels (n,), numbers or strings, none missing (NaN)
+or empty; optional `force_level` (n,) in newtons, finite and >= 0, and `channel_names`
+(channels,). The file is opened with allow_pickle=False: an object array (which numpy can only
+store pickled, and unpickling can run code) is refused.
 Long table (CSV/Parquet): one row per time step with a recording id column, a time column,
 the channel columns and the label column(s); optional force-level column. Recordings are
 sorted by time and cut to the shortest.
@@ -17,6 +19,12 @@ from data.errors import InputError
 from data.recordings import RecordingSet
 from data.table_files import check_numeric_columns, read_table_file
 
+# What to save instead of an object array, per array of the NPZ.
+NPZ_EXPECTED = {"X": "a numeric float array X of shape (n, channels, length)",
+                "y": "y as a numeric or string array of shape (n,)",
+                "force_level": "force_level as a numeric float array of shape (n,) in newtons",
+                "channel_names": "channel_names as a string array of shape (channels,)"}
+
 
 def _stack(arrays, source):
     lengths = [a.shape[-1] for a in arrays]
@@ -27,33 +35,83 @@ def _stack(arrays, source):
     return np.stack([a[:, :shortest] for a in arrays]).astype(np.float32)
 
 
+def _npz_array(archive, key, path) -> np.ndarray:
+    """One array of the archive; numpy refuses an object array under allow_pickle=False."""
+    try:
+        return archive[key]
+    except ValueError:
+        raise InputError(f"{path}: array '{key}' is an object (pickled) array, which is refused because "
+                         f"loading it could run code; save {NPZ_EXPECTED[key]}") from None
+
+
+def _first_bad(values, bad, name, path, problem: str) -> None:
+    """One line for the first flagged entry: `problem` is formatted with its value."""
+    if bad.any():
+        k = int(np.flatnonzero(bad)[0])
+        raise InputError(f"{path}: {name}[{k}] is {problem.format(values[k])}")
+
+
+def _check_labels(y, n, path) -> None:
+    """One label per recording, none missing: a NaN or empty label would become a class of its own."""
+    if y.ndim != 1:
+        raise InputError(f"{path}: y must be one label per recording, shape ({n},), got shape {y.shape}")
+    if len(y) != n:
+        raise InputError(f"{path}: y has {len(y)} labels for {n} recordings")
+    if np.issubdtype(y.dtype, np.inexact):
+        _first_bad(y, np.isnan(y), "y", path, "missing (NaN)")
+        _first_bad(y, ~np.isfinite(y), "y", path, "not finite ({})")
+    elif np.issubdtype(y.dtype, np.str_) or np.issubdtype(y.dtype, np.bytes_):
+        _first_bad(y, np.char.strip(y) == y.dtype.type(), "y", path, "an empty string ({!r})")
+
+
+def _check_force_levels(force, n, path) -> np.ndarray:
+    """Force levels in newtons: the force_level split and virtual levels compute with them."""
+    if not (np.issubdtype(force.dtype, np.integer) or np.issubdtype(force.dtype, np.floating)):
+        raise InputError(f"{path}: force_level must be numeric (newtons), got dtype {force.dtype}")
+    if force.ndim != 1 or len(force) != n:
+        raise InputError(f"{path}: force_level has {force.size} values for {n} recordings; expected shape ({n},)")
+    force = force.astype(np.float64)
+    _first_bad(force, np.isnan(force), "force_level", path, "missing (NaN)")
+    _first_bad(force, ~np.isfinite(force), "force_level", path, "not finite ({})")
+    _first_bad(force, force < 0, "force_level", path, "negative ({} N)")
+    return force
+
+
 def load_npz(path, label="y", sample_rate_hz=250.0) -> RecordingSet:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such file")
     try:
-        archive = np.load(path, allow_pickle=True)
+        archive = np.load(path, allow_pickle=False)
+    except ValueError as error:  # an object .npy or a pickle: numpy refuses it without unpickling
+        if "pickle" not in str(error):
+            raise InputError(f"{path}: cannot read NPZ (ValueError)") from None
+        raise InputError(f"{path}: pickled data is refused (loading it could run code); save an NPZ "
+                         f"with {NPZ_EXPECTED['X']} and labels y") from None
     except Exception as error:
         raise InputError(f"{path}: cannot read NPZ ({type(error).__name__})") from None
-    for key in ("X", "y"):
-        if key not in archive:
-            raise InputError(f"{path}: missing array '{key}'; found {', '.join(archive.files)}")
-    X, y = archive["X"], archive["y"]
-    if X.dtype == object:
-        X = _stack([np.asarray(a, dtype=np.float64) for a in X], path)
+    if not isinstance(archive, np.lib.npyio.NpzFile):
+        raise InputError(f"{path}: a single array, not an NPZ archive; save one with np.savez(path, X=..., y=...)")
+    with archive:
+        for key in ("X", "y"):
+            if key not in archive:
+                raise InputError(f"{path}: missing array '{key}'; found {', '.join(archive.files)}")
+        X, y = _npz_array(archive, "X", path), _npz_array(archive, "y", path)
+        force = _npz_array(archive, "force_level", path) if "force_level" in archive else None
+        names = _npz_array(archive, "channel_names", path) if "channel_names" in archive else None
     if X.ndim != 3:
         raise InputError(f"{path}: X must be (n, channels, length), got shape {X.shape}")
     if not np.issubdtype(X.dtype, np.number):
         raise InputError(f"{path}: X must be numeric, got dtype {X.dtype}")
-    if len(y) != len(X):
-        raise InputError(f"{path}: y has {len(y)} labels for {len(X)} recordings")
+    _check_labels(y, len(X), path)
     if not np.isfinite(X).all():
         raise InputError(f"{path}: X contains NaN or inf")
-    names = [str(c) for c in archive["channel_names"]] if "channel_names" in archive \
-        else [f"channel_{k}" for k in range(X.shape[1])]
+    names = [str(c) for c in names] if names is not None else [f"channel_{k}" for k in range(X.shape[1])]
+    if len(names) != X.shape[1]:
+        raise InputError(f"{path}: channel_names has {len(names)} names for {X.shape[1]} channels")
     labels = pd.DataFrame({label: y})
-    if "force_level" in archive:
-        labels["force_level_n"] = np.asarray(archive["force_level"], dtype=np.float64)
+    if force is not None:
+        labels["force_level_n"] = _check_force_levels(force, len(X), path)
     return RecordingSet(X.astype(np.float32), names, labels, sample_rate_hz, {"source": "npz", "path": str(path)})
 
 

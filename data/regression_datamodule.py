@@ -13,13 +13,13 @@ import numpy as np
 from sklearn.preprocessing import StandardScaler
 
 from data.features import compute_features, feature_names
-from data.splits import holdout
+from data.splits import SPLIT_NOTES, holdout
 from data.errors import InputError
 from data.tables import SensorTable, TableSource
 
 
 class RegressionDataModule:
-    def __init__(self, source, features, split="random", test_fraction=0.15, val_fraction=0.15,
+    def __init__(self, source, features, split="grouped", test_fraction=0.15, val_fraction=0.15,
                  calibration_fraction=0.0, n_folds=5, seed=0):
         self.source = source
         self.features = features
@@ -82,7 +82,7 @@ class RegressionDataModule:
         return self._part(self.cal_idx if self.cal_idx.size else self.val_idx)
 
     def summary(self) -> dict:
-        return {"split": self.split, "n_train": int(self.train_idx.size), "n_val": int(self.val_idx.size),
+        return {"split": self.split, "split_note": SPLIT_NOTES.get(self.split, ""), "n_train": int(self.train_idx.size), "n_val": int(self.val_idx.size),
                 "n_calibration": int(self.cal_idx.size), "n_test": int(self.test_idx.size), "n_features": len(self.feature_names),
                 "channels": self.channel_names, "targets": self.target_names,
                 "source": self.table.description}

@@ -1,8 +1,8 @@
-"""Held-out test, validation and K-fold indices, random or grouped by press point.
+"""Held-out test, validation and K-fold indices, grouped by press point or random.
 
-`random` is the seed paper's split. `grouped` keeps every repeat of one position-depth pair
-on one side, because random splits over repeated presses let a model recognise a repeat
-instead of generalising, which overstates accuracy.
+`grouped` (the default) keeps every repeat of one position-depth pair on one side, because
+random splits over repeated presses let a model recognise a repeat instead of generalising,
+which overstates accuracy. `random` is the seed paper's protocol (repeats shared).
 """
 import numpy as np
 from sklearn.model_selection import GroupKFold, GroupShuffleSplit, KFold, ShuffleSplit
@@ -10,6 +10,9 @@ from sklearn.model_selection import GroupKFold, GroupShuffleSplit, KFold, Shuffl
 from data.errors import InputError
 
 SPLITS = ("random", "grouped")
+# What a reader of the figures must know about each split; metrics.json and the README carry it.
+SPLIT_NOTES = {"grouped": "every repeat of a position-depth pair on one side (no press shared)",
+               "random": "the paper's protocol, repeats shared between training and test"}
 
 
 def holdout(indices: np.ndarray, groups: np.ndarray, fraction: float, split: str, seed: int):
@@ -56,3 +59,12 @@ def kfold_indices(n_rows: int, n_folds: int, seed: int, groups=None):
             raise InputError(f"K-fold with n_folds={n_folds} needs at least that many rows, got {n_rows}")
         folds = KFold(n_splits=n_folds, shuffle=True, random_state=seed).split(np.zeros(n_rows))
     return [(fit, held) for fit, held in folds], warning
+
+
+def carve_validation(n_rows: int, fraction: float, seed: int, groups=None):
+    """(fit_rows, validation_rows) for a model that must early-stop and was given no validation
+    split: grouped when `groups` are given (every repeat of a press on one side), else random."""
+    rows = np.arange(n_rows)
+    if groups is None:
+        return holdout(rows, rows, fraction, "random", seed)
+    return holdout(rows, np.asarray(groups), fraction, "grouped", seed)

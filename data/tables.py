@@ -2,13 +2,16 @@
 
 A SensorTable holds one row per press: channel columns (inputs), target columns (what to
 learn, units in their names) and a group id per row (all repeats of one position-depth
-pair share a group, so grouped splits can keep them on one side).
+pair share a group, so grouped splits can keep them on one side). When the channels were
+normalised from raw readings (scene rubber12_lab's min-max step), `normalisation` keeps how,
+so a model trained on them can be deployed on the raw readings.
 """
 from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
 from data.errors import InputError
+from data.minmax_scaling import MinMaxScaling
 from data.table_files import check_numeric_columns, read_table_file
 
 
@@ -19,6 +22,7 @@ class SensorTable:
     target_columns: list[str]
     groups: np.ndarray
     description: dict = field(default_factory=dict)
+    normalisation: MinMaxScaling | None = None  # raw readings -> channel_columns; None: channels are raw
 
     @property
     def channels(self) -> np.ndarray:

@@ -6,16 +6,19 @@ trains them:
 - `force_calibration` turns the piezoresistive divider voltage into newtons (Algorithm 1
   compares the channel's maximum with force levels in newtons);
 - recordings are decimated, trimmed and cut into windows (data/windows.py);
-- `split=force_level` trains on the recorded levels (paper: 1, 10, 15, 25 N) and validates on
-  levels never used in training (5, 20 N); `split=stratified` holds out a stratified share of
-  recordings. Windows of one recording always stay on one side;
+- `split=force_level` trains on the recorded levels (paper: 1, 10, 15, 25 N); the recordings at
+  levels never used in training (5, 20 N) are divided by recording into validation (to choose
+  with) and test (to report on), `test_fraction` of them to test. `split=stratified` holds out
+  `test_fraction` of all recordings for test, then `val_fraction` of the rest for validation,
+  stratified by label. Windows of one recording always stay on one side;
 - `modalities` name groups of channels (names or indices), e.g. triboelectric: [0];
   any number of groups and channels per group, so an IMU's accelerometer + gyroscope fit too;
 - `augment` with `enabled: true` adds virtual force-level windows (Algorithm 1) to training;
-- channels are standardised with statistics of the real training windows.
+- channels are standardised with statistics of the real training windows (validation and test
+  with the same ones).
 """
 import numpy as np
-from sklearn.model_selection import StratifiedShuffleSplit
+from sklearn.model_selection import ShuffleSplit, StratifiedShuffleSplit
 
 from data.errors import InputError
 from data.physics.force_sensing_resistor import calibrated_channel_name, fsr_force_n
@@ -24,13 +27,18 @@ from data.virtual_force_levels import virtual_force_levels
 from data.windows import cut_windows, decimate
 
 
+def _check_fraction(name, value) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < 1.0:
+        raise InputError(f"data.{name} must be a number in (0, 1), got {value!r}")
+
+
 class TimeSeriesDataModule:
     task = "classification"
 
     def __init__(self, source, label="material", modalities=None, decimate=10, window_length=140,
                  window_step=20, trim_start=3, trim_end=3, min_variance=0.0, variance_channel=0,
                  split="force_level", train_levels=(1, 10, 15, 25), val_levels=(5, 20), val_fraction=0.2,
-                 force_calibration=None, augment=None, seed=0):
+                 test_fraction=0.5, force_calibration=None, augment=None, seed=0):
         self.source = source
         self.label = label
         self.modalities = modalities
@@ -45,6 +53,7 @@ class TimeSeriesDataModule:
         self.train_levels = train_levels
         self.val_levels = val_levels
         self.val_fraction = val_fraction
+        self.test_fraction = test_fraction
         self.force_calibration = force_calibration
         self.augment = augment
         self.seed = seed
@@ -82,7 +91,36 @@ class TimeSeriesDataModule:
             raise InputError(f"unknown channel '{channel}'; available: {', '.join(names)}")
         return names.index(channel)
 
+    def _divide_unseen(self, rows, labels):
+        """Recordings at the unseen levels -> (validation, test, strata used), by recording.
+
+        Stratified by label and force level where every stratum has enough recordings, else by
+        label, else a plain seeded shuffle: training never sees either side, so a coarser
+        stratification costs balance, never honesty.
+        """
+        if len(rows) < 2:
+            raise InputError(f"data.split=force_level: {len(rows)} recording(s) at data.val_levels "
+                             f"{list(self.val_levels)} N; validation and test need at least one each")
+        label = labels[self.label].astype(str).to_numpy()[rows]
+        label_and_level = np.array([f"{c}|{d}" for c, d in zip(label, labels["force_level_n"].to_numpy()[rows])])
+        for strata, key in (([self.label, "force_level_n"], label_and_level), ([self.label], label)):
+            try:
+                splitter = StratifiedShuffleSplit(n_splits=1, test_size=self.test_fraction, random_state=self.seed)
+                val, test = next(splitter.split(np.zeros(len(rows)), key))
+                return rows[val], rows[test], strata
+            except ValueError:  # a stratum with one recording, or fewer test slots than strata
+                continue
+        try:
+            val, test = next(ShuffleSplit(n_splits=1, test_size=self.test_fraction,
+                                          random_state=self.seed).split(rows))
+        except ValueError:  # the share rounds one side down to no recording
+            raise InputError(f"data.test_fraction={self.test_fraction} leaves validation or test without a "
+                             f"recording of the {len(rows)} at data.val_levels") from None
+        return rows[val], rows[test], []
+
     def _split_recordings(self, labels):
+        """(train, validation, test) recording indices; every window follows its recording."""
+        _check_fraction("test_fraction", self.test_fraction)
         if self.split == "force_level":
             if "force_level_n" not in labels:
                 raise InputError("data.split=force_level needs a force level per recording")
@@ -94,13 +132,22 @@ class TimeSeriesDataModule:
             if missing:
                 raise InputError(f"force level(s) {sorted(missing)} N were not recorded; recorded: "
                                  f"{sorted(set(levels.tolist()))}")
-            return np.flatnonzero(np.isin(levels, list(train))), np.flatnonzero(np.isin(levels, list(val)))
+            unseen = np.flatnonzero(np.isin(levels, list(val)))
+            val_rec, test_rec, self.test_stratified_by = self._divide_unseen(unseen, labels)
+            return np.flatnonzero(np.isin(levels, list(train))), np.sort(val_rec), np.sort(test_rec)
         if self.split == "stratified":
-            splitter = StratifiedShuffleSplit(n_splits=1, test_size=self.val_fraction, random_state=self.seed)
+            _check_fraction("val_fraction", self.val_fraction)
+            # Stratified by label, never falling back: a class missing from training is not a split.
+            classes = labels[self.label].astype(str).to_numpy()
             try:
-                return next(splitter.split(np.zeros(len(labels)), labels[self.label].astype(str)))
-            except ValueError as error:  # too few recordings per class for the requested share
+                rest, test = next(StratifiedShuffleSplit(n_splits=1, test_size=self.test_fraction,
+                                                         random_state=self.seed).split(classes, classes))
+                train, val = next(StratifiedShuffleSplit(n_splits=1, test_size=self.val_fraction,
+                                                         random_state=self.seed).split(rest, classes[rest]))
+            except ValueError as error:  # too few recordings per class for the requested shares
                 raise InputError(f"data.split=stratified: {error}") from None
+            self.test_stratified_by = [self.label]
+            return np.sort(rest[train]), np.sort(rest[val]), np.sort(test)
         raise InputError(f"data.split must be force_level or stratified, got '{self.split}'")
 
     def setup(self) -> "TimeSeriesDataModule":
@@ -111,8 +158,8 @@ class TimeSeriesDataModule:
         labels = recordings.labels
         self.classes = sorted(labels[self.label].astype(str).unique())
         codes = labels[self.label].astype(str).map({c: i for i, c in enumerate(self.classes)}).to_numpy()
-        train_rec, val_rec = self._split_recordings(labels)
-        self.train_recordings, self.val_recordings = train_rec, val_rec
+        train_rec, val_rec, test_rec = self._split_recordings(labels)
+        self.train_recordings, self.val_recordings, self.test_recordings = train_rec, val_rec, test_rec
 
         def windows_of(rows):
             X, owner = cut_windows(signals[rows], self.window_length, self.window_step, self.trim_start,
@@ -122,7 +169,9 @@ class TimeSeriesDataModule:
 
         X_train, y_train, levels_train, self.train_window_recording = windows_of(train_rec)
         X_val, y_val, self.val_levels_per_window, self.val_window_recording = windows_of(val_rec)
+        X_test, y_test, self.test_levels_per_window, self.test_window_recording = windows_of(test_rec)
         self.augment_report = None
+        # Virtual force levels are made from training windows only: validation and test stay unseen.
         if self.augment and self.augment.get("enabled", False):
             if levels_train is None:
                 raise InputError("augment=virtual_force_levels needs a force level per recording")
@@ -144,7 +193,8 @@ class TimeSeriesDataModule:
         self.channel_std = np.where(X_real.std(axis=(0, 2), keepdims=True) > 0, X_real.std(axis=(0, 2), keepdims=True), 1.0)
         self.X_train = ((X_train - self.channel_mean) / self.channel_std).astype(np.float32)
         self.X_val = ((X_val - self.channel_mean) / self.channel_std).astype(np.float32)
-        self.y_train, self.y_val = y_train.astype(np.int64), y_val.astype(np.int64)
+        self.X_test = ((X_test - self.channel_mean) / self.channel_std).astype(np.float32)
+        self.y_train, self.y_val, self.y_test = y_train.astype(np.int64), y_val.astype(np.int64), y_test.astype(np.int64)
         self.channel_names = names
         groups = self.modalities or {name: [name] for name in names}
         self.modality_channels = {g: [self._channel_index(c, names) for c in chs] for g, chs in groups.items()}
@@ -162,12 +212,21 @@ class TimeSeriesDataModule:
     def val(self):
         return self.X_val, self.y_val
 
+    @property
+    def test(self):
+        """Held-out windows for reporting only: nothing is chosen on them."""
+        return self.X_test, self.y_test
+
     def summary(self) -> dict:
         return {"task": self.task, "label": self.label, "classes": self.classes, "split": self.split,
                 "train_levels": list(self.train_levels) if self.split == "force_level" else None,
                 "val_levels": list(self.val_levels) if self.split == "force_level" else None,
                 "n_train_windows": int(len(self.y_train)), "n_virtual_windows": int(self.n_virtual_windows),
-                "n_val_windows": int(len(self.y_val)), "window": [int(self.X_train.shape[1]), int(self.X_train.shape[2])],
+                "n_val_windows": int(len(self.y_val)), "n_test_windows": int(len(self.y_test)),
+                "n_train_recordings": int(len(self.train_recordings)),
+                "n_val_recordings": int(len(self.val_recordings)), "n_test_recordings": int(len(self.test_recordings)),
+                "test_fraction": self.test_fraction, "test_stratified_by": self.test_stratified_by,
+                "window": [int(self.X_train.shape[1]), int(self.X_train.shape[2])],
                 "sample_rate_hz": self.sample_rate_hz, "channels": self.channel_names,
                 "modalities": self.modality_channels, "augment": self.augment_report,
                 "source": self.recordings.description}

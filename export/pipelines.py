@@ -1,6 +1,7 @@
 """Turn a deployable pipeline (models/deployable.py) into one self-contained ONNX model.
 
-Regression: `channels` [batch, n_channels] float64 raw readings -> physics features and scaler
+Regression: `channels` [batch, n_channels] float64 raw readings -> (the data set's min-max
+normalisation, for models trained on normalised channels) -> physics features and scaler
 -> the model(s) -> `prediction` [batch, n_targets] in units, and for models with calibrated
 intervals `interval_half_width` (the conformal scale times sigma_total, eq. 21-24, computed in
 the graph from the fold models' spread, the candidates' disagreement and sigma_data).
@@ -57,7 +58,8 @@ def _mean_and_model_variance(builder, model, features, n_features, n_targets, op
 def regression_graph(pipeline: RegressionPipeline, opset: int, metadata: dict) -> onnx.ModelProto:
     n_channels, n_features, n_targets = len(pipeline.channel_names), len(pipeline.feature_names), len(pipeline.target_names)
     builder = GraphBuilder(opset)
-    front = to_onnx(RegressionFrontEnd(pipeline.feature_groups, pipeline.scaler_mean, pipeline.scaler_scale),
+    front = to_onnx(RegressionFrontEnd(pipeline.feature_groups, pipeline.scaler_mean, pipeline.scaler_scale,
+                                       pipeline.normalisation),
                     torch.ones(2, n_channels, dtype=torch.float64), "channels", "features", opset)
     features = builder.add_model(front, {"channels": "channels"}, "front")["features"]
     model = pipeline.model

@@ -1,9 +1,10 @@
 """Torch modules that wrap a deployable pipeline for ONNX, and the torch exporter call.
 
-The preprocessing steps themselves are not restated here: the physics features, the FSR
-calibration and the decimation are the data side's own torch code (data/features.py,
-data/physics/force_sensing_resistor.py, data/windows.py), the same code training ran. Features
-run in float64; the rest of the graph in float32.
+The preprocessing steps themselves are not restated here: the min-max normalisation, the physics
+features, the FSR calibration and the decimation are the data side's own torch code
+(data/minmax_scaling.py, data/features.py, data/physics/force_sensing_resistor.py,
+data/windows.py), the same code training ran. Normalisation and features run in float64; the
+rest of the graph in float32.
 """
 import contextlib
 import io
@@ -20,16 +21,18 @@ from data.physics.force_sensing_resistor import CALIBRATION_KEYS, FsrCalibration
 from data.windows import decimate
 
 class RegressionFrontEnd(nn.Module):
-    """raw readings (float64) -> physics features -> training-split standardisation -> float32."""
+    """raw readings (float64) -> the data set's min-max normalisation, if the model was trained on
+    normalised channels -> physics features -> training-split standardisation -> float32."""
 
-    def __init__(self, groups, scaler_mean, scaler_scale):
+    def __init__(self, groups, scaler_mean, scaler_scale, normalisation=None):
         super().__init__()
+        self.normalise = normalisation.module() if normalisation is not None else nn.Identity()
         self.features = PhysicsFeatures(groups)
         self.register_buffer("scaler_mean", torch.as_tensor(np.asarray(scaler_mean), dtype=torch.float64))
         self.register_buffer("scaler_scale", torch.as_tensor(np.asarray(scaler_scale), dtype=torch.float64))
 
     def forward(self, readings):
-        return ((self.features(readings) - self.scaler_mean) / self.scaler_scale).float()
+        return ((self.features(self.normalise(readings)) - self.scaler_mean) / self.scaler_scale).float()
 
 
 class ResMLPInUnits(nn.Module):

@@ -2,7 +2,9 @@
 
 A deployable pipeline bundles the fitted preprocessing (features and scaler, or calibration,
 decimation and channel scaling) with the fitted model, so that `predict_raw` on raw readings
-is the eager reference that the exported ONNX graph must match. Runs save it as
+is the eager reference that the exported ONNX graph must match. A regression model trained on
+min-max normalised channels (scene rubber12_lab) takes raw readings all the same: the pipeline
+keeps the data set's normalisation and applies it before the features. Runs save it as
 `pipeline.pkl` in their output folder; export/ turns it into one ONNX file.
 """
 import pickle
@@ -13,13 +15,14 @@ import numpy as np
 
 from data.atomic import atomic_write
 from data.features import compute_features, enabled_groups
+from data.minmax_scaling import MinMaxScaling
 from data.physics.force_sensing_resistor import CALIBRATION_KEYS, calibrated_channel_name, fsr_force_n
 from data.windows import decimate
 
 
 @dataclass
 class RegressionPipeline:
-    channel_names: list[str]
+    channel_names: list[str]  # the raw readings it takes
     target_names: list[str]
     feature_groups: list[str]
     feature_names: list[str]
@@ -28,8 +31,12 @@ class RegressionPipeline:
     model: object
     description: dict = field(default_factory=dict)
     examples: np.ndarray | None = None  # raw test-split readings, for latency measurements
+    normalisation: MinMaxScaling | None = None  # raw readings -> the channels it was trained on
 
     def features(self, readings) -> np.ndarray:
+        """Standardised features of raw readings, normalised first if the training channels were."""
+        if self.normalisation is not None:
+            readings = self.normalisation.normalise(readings)
         return (compute_features(readings, self.feature_groups) - self.scaler_mean) / self.scaler_scale
 
     def predict_raw(self, readings):
@@ -73,11 +80,14 @@ class TimeSeriesPipeline:
 
 
 def regression_pipeline(datamodule, model) -> RegressionPipeline:
-    return RegressionPipeline(list(datamodule.channel_names), list(datamodule.target_names),
+    table = datamodule.table
+    channels, examples = list(datamodule.channel_names), table.channels[datamodule.test_idx][:1024].copy()
+    if table.normalisation is not None:  # deployed on the raw readings the channels came from
+        channels, examples = list(table.normalisation.raw_channels), table.normalisation.raw(examples)
+    return RegressionPipeline(channels, list(datamodule.target_names),
                               enabled_groups(datamodule.features), list(datamodule.feature_names),
                               datamodule.scaler.mean_.copy(), datamodule.scaler.scale_.copy(), model,
-                              {"source": datamodule.table.description},
-                              datamodule.table.channels[datamodule.test_idx][:1024].copy())
+                              {"source": table.description}, examples, table.normalisation)
 
 
 def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:

@@ -1,17 +1,21 @@
 """K-fold blending (seed eq. 17): K copies of a model, each trained on K - 1 folds of the
 training data, averaged at prediction time.
 
-Works for any estimator of the contract. Nets early-stop on the fold they did not see.
-The fold models' spread gives the model uncertainty sigma_model (eq. 21); the out-of-fold
-residuals give the data noise sigma_data (eq. 22, one variance per target); the total is
-sigma_total = sqrt(sigma_model^2 + sigma_data^2) (eq. 23-24). Classifiers average
-probabilities.
+Works for any estimator of the contract. The fold models' spread gives the model uncertainty
+sigma_model (eq. 21); the out-of-fold residuals give the data noise sigma_data (eq. 22, one
+variance per target); the total is sigma_total = sqrt(sigma_model^2 + sigma_data^2) (eq. 23-24).
+Classifiers average probabilities.
+
+The held-out fold is never shown to its fold model: a net carves its early-stopping rows from
+its own K - 1 folds (grouped when groups are given), so the out-of-fold predictions that feed
+sigma_data and the stacking weights come from rows the model neither trained nor stopped on.
 """
 import logging
 import time
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.utils.validation import check_is_fitted, validate_data
 from tqdm.auto import tqdm
 
 from data.splits import kfold_indices
@@ -20,15 +24,24 @@ from models.uncertainty import IntervalMixin
 log = logging.getLogger(__name__)
 
 
-class KFoldBlend(IntervalMixin, BaseEstimator, RegressorMixin):
+class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
     def __init__(self, estimator=None, n_folds=5, seed=0, progress=True):
         self.estimator = estimator
         self.n_folds = n_folds
         self.seed = seed
         self.progress = progress
 
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.multi_output = True
+        tags.target_tags.single_output = True
+        return tags
+
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
-        X, y = np.asarray(X), np.asarray(y, dtype=np.float64)
+        """X_val and y_val are accepted for the contract and not used: the folds validate."""
+        X, y = validate_data(self, X, y, multi_output=True, y_numeric=True, dtype=np.float64)
+        if self.estimator is None:
+            raise ValueError("KFoldBlend needs an estimator to blend")
         y2 = y.reshape(len(y), -1)
         self.models_, self.fold_fit_time_s_, self.fold_fit_cpu_time_s_ = [], [], []
         out_of_fold = np.zeros_like(y2)
@@ -40,9 +53,8 @@ class KFoldBlend(IntervalMixin, BaseEstimator, RegressorMixin):
             if "seed" in model.get_params():
                 model.set_params(seed=self.seed + k)
             start, cpu_start = time.perf_counter(), time.process_time()
-            # Each fold model early-stops (if it can) on the fold it was not trained on.
-            model.fit(X[fit_rows], y[fit_rows], X[held_rows], y[held_rows],
-                      epoch_callback=epoch_callback if k == 0 else None)
+            model.fit(X[fit_rows], y[fit_rows], epoch_callback=epoch_callback if k == 0 else None,
+                      groups=None if groups is None else np.asarray(groups)[fit_rows])
             self.fold_fit_time_s_.append(time.perf_counter() - start)
             self.fold_fit_cpu_time_s_.append(time.process_time() - cpu_start)
             if hasattr(model, "predict_proba"):
@@ -53,11 +65,12 @@ class KFoldBlend(IntervalMixin, BaseEstimator, RegressorMixin):
         if out_of_fold is not None:
             self.out_of_fold_ = out_of_fold
             self.data_variance_ = ((y2 - out_of_fold) ** 2).mean(axis=0)
-        self.n_features_in_ = X.shape[1]
         self.single_output_ = y.ndim == 1
         return self
 
     def _fold_predictions(self, X) -> np.ndarray:
+        check_is_fitted(self, "models_")
+        X = validate_data(self, X, reset=False, dtype=np.float64)
         return np.stack([m.predict(X).reshape(len(X), -1) for m in self.models_])
 
     def predict(self, X):
@@ -65,6 +78,7 @@ class KFoldBlend(IntervalMixin, BaseEstimator, RegressorMixin):
         return mean[:, 0] if self.single_output_ else mean
 
     def predict_proba(self, X):
+        check_is_fitted(self, "models_")
         return np.mean([m.predict_proba(X) for m in self.models_], axis=0)
 
     def predict_components(self, X):

@@ -14,15 +14,17 @@ import math
 import numpy as np
 import torch
 from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
 from tqdm.auto import tqdm
 
 from data.errors import InputError
+from data.splits import carve_validation
 from models.nets.resmlp import ResMLP
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
 
-class ResMLPRegressor(BaseEstimator, RegressorMixin):
+class ResMLPRegressor(RegressorMixin, BaseEstimator):
     def __init__(self, widths=(256, 128, 96, 64), dropouts=(0.40, 0.35, 0.30, 0.25), noise_std=0.02,
                  lr=1e-3, l1=1e-5, l2=1e-4, batch_size=32, max_epochs=300, early_stopping_patience=30,
                  lr_plateau_patience=10, lr_factor=0.5, val_fraction=0.15, device="cpu", seed=0,
@@ -42,6 +44,12 @@ class ResMLPRegressor(BaseEstimator, RegressorMixin):
         self.device = device
         self.seed = seed
         self.progress = progress
+
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.multi_output = True
+        tags.non_deterministic = self.device != "cpu"
+        return tags
 
     # -- helpers ----------------------------------------------------------------------------
     def _tensor(self, a):
@@ -64,16 +72,18 @@ class ResMLPRegressor(BaseEstimator, RegressorMixin):
     @flush_denormals()
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
         torch.manual_seed(self.seed)
-        X = np.asarray(X, dtype=np.float64)
-        y = np.asarray(y, dtype=np.float64).reshape(len(X), -1)
-        if X_val is None:  # no validation split given: carve one, seeded, for early stopping
-            order = np.random.default_rng(self.seed).permutation(len(X))
-            n_val = max(1, int(round(self.val_fraction * len(X))))
-            X, y, X_val, y_val = X[order[n_val:]], y[order[n_val:]], X[order[:n_val]], y[order[:n_val]]
+        X, y = validate_data(self, X, y, multi_output=True, y_numeric=True, dtype=np.float64)
+        self.single_output_ = y.ndim == 1
+        y = y.reshape(len(X), -1)
+        if len(X) < 2:
+            raise InputError(f"resmlp needs at least 2 samples to train and early-stop, got {len(X)} sample")
+        if X_val is None:  # no validation split given: carve one (grouped, seeded) for early stopping
+            fit_rows, val_rows = carve_validation(len(X), self.val_fraction, self.seed, groups)
+            X, y, X_val, y_val = X[fit_rows], y[fit_rows], X[val_rows], y[val_rows]
+        X_val = np.asarray(X_val, dtype=np.float64)
         y_val = np.asarray(y_val, dtype=np.float64).reshape(len(X_val), -1)
 
         self.device_ = resolve_device(self.device)
-        self.n_features_in_ = X.shape[1]
         self.feature_mean_ = X.mean(axis=0)
         self.feature_scale_ = np.where(X.std(axis=0) > 0, X.std(axis=0), 1.0)
         self.target_mean_ = y.mean(axis=0)
@@ -133,10 +143,13 @@ class ResMLPRegressor(BaseEstimator, RegressorMixin):
         return self
 
     def predict(self, X):
+        check_is_fitted(self, "module_")
+        X = validate_data(self, X, reset=False, dtype=np.float64)
         self.module_.eval()
         with torch.no_grad():
             out = self.module_(self._inputs(X)).cpu().numpy().astype(np.float64)
-        return out * self.target_scale_ + self.target_mean_
+        out = out * self.target_scale_ + self.target_mean_
+        return out[:, 0] if self.single_output_ else out
 
     @property
     def n_parameters_(self) -> int:

@@ -8,13 +8,14 @@ from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.ensemble import ExtraTreesRegressor, RandomForestRegressor
 from sklearn.multioutput import MultiOutputRegressor
 from sklearn.tree import DecisionTreeRegressor
+from sklearn.utils.validation import check_is_fitted, validate_data
 
 from data.errors import InputError
 
 KINDS = ("random_forest", "extra_trees", "decision_tree")
 
 
-class TreeRegressor(BaseEstimator, RegressorMixin):
+class TreeRegressor(RegressorMixin, BaseEstimator):
     def __init__(self, kind="extra_trees", n_estimators=400, max_depth=14, max_features="sqrt",
                  min_samples_leaf=1, per_output=False, n_jobs=-1, seed=0):
         self.kind = kind
@@ -37,28 +38,37 @@ class TreeRegressor(BaseEstimator, RegressorMixin):
             return ExtraTreesRegressor(n_estimators=self.n_estimators, n_jobs=self.n_jobs, **common)
         raise InputError(f"model.kind must be one of {', '.join(KINDS)}, got '{self.kind}'")
 
+    def __sklearn_tags__(self):
+        tags = super().__sklearn_tags__()
+        tags.target_tags.multi_output = True
+        return tags
+
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
-        base = self._base()
-        y = np.asarray(y)
+        X, y = validate_data(self, X, y, multi_output=True, y_numeric=True, dtype=np.float32)
         if y.ndim == 2 and y.shape[1] == 1:
             y = y[:, 0]  # scikit-learn wants a single target as a vector
-        self.estimator_ = MultiOutputRegressor(base) if self.per_output else base
+        base = self._base()
+        self.estimator_ = MultiOutputRegressor(base) if self.per_output and y.ndim == 2 else base
         self.estimator_.fit(X, y)
-        self.n_features_in_ = self.estimator_.n_features_in_
+        # Predict on one thread: parallel forests add their trees' outputs in the order threads
+        # finish, so the same run would differ in the last bit; a batch-1 prediction is also
+        # faster without the thread pool. Fitting above stays parallel (each tree is seeded).
+        self.estimator_.set_params(**{key: 1 for key in self.estimator_.get_params() if key.endswith("n_jobs")})
         return self
 
     def predict(self, X):
-        return self.estimator_.predict(X)
+        check_is_fitted(self, "estimator_")
+        return self.estimator_.predict(validate_data(self, X, reset=False, dtype=np.float32))
 
     def feature_importances(self):
         """Impurity importances, averaged over the per-output forests when there are several."""
-        fitted = self.estimator_.estimators_ if self.per_output else [self.estimator_]
+        fitted = self.estimator_.estimators_ if isinstance(self.estimator_, MultiOutputRegressor) else [self.estimator_]
         return np.mean([m.feature_importances_ for m in fitted], axis=0)
 
     @property
     def n_nodes_(self) -> int:
         """Total decision nodes over every tree, the trees' analogue of a parameter count."""
-        fitted = self.estimator_.estimators_ if self.per_output else [self.estimator_]
+        fitted = self.estimator_.estimators_ if isinstance(self.estimator_, MultiOutputRegressor) else [self.estimator_]
         total = 0
         for model in fitted:
             trees = getattr(model, "estimators_", [model])

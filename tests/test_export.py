@@ -89,7 +89,15 @@ def test_exported_file_is_self_contained_and_carries_its_metadata(exported, tmp_
     alone = tmp_path / "robot" / "model.onnx"
     alone.parent.mkdir()
     shutil.copy(path, alone)
-    assert sorted(p.name for p in alone.parent.iterdir()) == ["model.onnx"]
+    # Self-contained means the export writes model.onnx and nothing else (no external-data
+    # sidecar the copy above would have missed): export the same run again, in a copy of its
+    # folder without its model.onnx, and compare the folder's listing before and after.
+    again = tmp_path / "run"
+    shutil.copytree(path.parent, again, ignore=shutil.ignore_patterns(path.name))
+    before = sorted(str(p.relative_to(again)) for p in again.rglob("*"))
+    assert "pipeline.pkl" in before and path.name not in before
+    assert export_run(again) == again / path.name
+    assert sorted(str(p.relative_to(again)) for p in again.rglob("*")) == sorted(before + [path.name])
     predictor = OnnxPredictor(alone)
     assert predictor.channels == pipeline.channel_names and predictor.targets == pipeline.target_names
     meta = {p.key: p.value for p in onnx.load(alone).metadata_props}

@@ -61,7 +61,22 @@ def test_pair_operators_use_neighbouring_channels():
     products = compute_features(r, {"pair_products": True})
     ratios = compute_features(r, {"pair_ratios": True})
     np.testing.assert_allclose(products[0], r[0, :-1] * r[0, 1:])
-    np.testing.assert_allclose(ratios[0], r[0, :-1] / (r[0, 1:] + 1e-8))
+    # the guard is 1e-4 of the sample's total reading (78 here)
+    np.testing.assert_allclose(ratios[0], r[0, :-1] / (r[0, 1:] + 1e-4 * r.sum()), rtol=1e-15)
+
+
+def test_ratios_of_normalised_channels_stay_bounded_at_exact_zeros():
+    """Min-max normalised channels are exactly 0 at their minimum: a fixed 1e-8 guard gave 7.9e7."""
+    r = np.array([[0.79, 0.0, 0.5, 0.0, 1.0, 0.3, 0.0, 0.0, 0.2, 0.9, 0.4, 0.6],
+                  [1.0] + [0.0] * 11,                                    # the worst case: 1 / (1e-4 * 1)
+                  [0.0] * 12])
+    ratios = compute_features(r, {"pair_ratios": True})
+    assert np.isfinite(ratios).all() and np.abs(ratios).max() <= 1e4 * (1 + 1e-12)
+    np.testing.assert_allclose(ratios[0, 0], 0.79 / (1e-4 * r[0].sum()))
+    np.testing.assert_allclose(ratios[1, 0], 1e4)
+    np.testing.assert_array_equal(ratios[2], 0.0)
+    # a normalised reading slightly below 0 (raw ohms under the training minimum) cannot cancel the guard
+    assert np.isfinite(compute_features(np.array([[0.5, -1e-4, 0.5] + [0.0] * 9]), {"pair_ratios": True})).all()
 
 
 def test_bad_feature_config_is_a_clear_error():

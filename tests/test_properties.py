@@ -1,10 +1,10 @@
 """Hard cases stay numerically stable: property-based tests with explicit strategies for the
 regions where sensors near percolation live (0 to 1e12 ohm, exact zeros, denormals, equal or
-dead channels), in float32 and float64.
+dead channels) and min-max normalised channels (in [0, 1], exact zeros), in float32 and float64.
 
-Example counts (profile "ci"): features 3000 + ONNX parity 2000 + virtual force levels 1500 +
-metrics 1500 + blend weights 1000 + conformal 1000 = 10,000 per CI run. The "thorough" profile
-multiplies each by 20.
+Example counts (profile "ci"): features 3000 + normalised ratios 1000 + ONNX parity 2000 +
+virtual force levels 1500 + metrics 1500 + blend weights 1000 + conformal 1000 = 11,000 per CI
+run. The "thorough" profile multiplies each by 20.
 """
 import numpy as np
 import pytest
@@ -61,6 +61,30 @@ def test_features_are_finite_and_defined_everywhere(r, dtype):
     assert (features[equal][:, 36:48] == 0).all() and (features[equal][:, 50:52] == 0).all()
 
 
+# Min-max normalised channels (scene=rubber12_lab): unitless in [0, 1], exactly 0 at each
+# channel's minimum and 1 at its maximum, so exact zeros are common in a sample.
+unit_value = st.one_of(st.sampled_from([0.0, 0.0, 1.0, 5e-324, 1e-12, 1e-6]), st.floats(0.0, 1.0))
+
+
+@st.composite
+def normalised_readings(draw, n_channels=12):
+    rows = draw(st.integers(1, 4))
+    return draw(arrays(np.float64, (rows, n_channels), elements=unit_value))
+
+
+RATIOS = slice(52, 63)  # 48 + 4 stats + 11 products, then the 11 ratios
+
+
+@examples(1000)
+@given(normalised_readings(), st.sampled_from([np.float64, np.float32]))
+@example(np.array([[0.79, 0.0, 0.5, 0.0, 1.0, 0.3, 0.0, 0.0, 0.2, 0.9, 0.4, 0.6]]), np.float64)  # was 7.9e7
+@example(np.r_[1.0, np.zeros(11)][None], np.float64)  # one live channel: the bound itself
+def test_ratios_of_normalised_channels_stay_bounded(r, dtype):
+    features = compute_features(r.astype(dtype), ALL)
+    assert np.isfinite(features).all()
+    assert np.abs(features[:, RATIOS]).max() <= 1e4 * (1 + 1e-12)
+
+
 @pytest.fixture(scope="module")
 def features_session():
     import onnxruntime as ort
@@ -71,8 +95,9 @@ def features_session():
 
 
 @examples(2000)
-@given(r=readings())
+@given(r=st.one_of(readings(), normalised_readings()))
 @example(r=np.zeros((1, 12)))
+@example(r=np.r_[1.0, np.zeros(11)][None])
 @example(r=np.r_[np.full(11, 1e12), 0.0][None])
 def test_exported_features_match_numpy(features_session, r):
     onnx_features = features_session.run(None, {"channels": r})[0]

@@ -43,12 +43,111 @@ def test_force_level_split_never_leaks_a_level():
     dm = TimeSeriesDataModule(small_scene(), label="board", force_calibration=CALIBRATION).setup()
     levels = dm.recordings.labels["force_level_n"].to_numpy()
     assert set(levels[dm.train_window_recording]) == {1, 10, 15, 25}
-    assert set(levels[dm.val_window_recording]) == {5, 20}
+    assert set(levels[dm.val_window_recording]) == set(levels[dm.test_window_recording]) == {5, 20}
+    assert not set(levels[dm.train_window_recording]) & set(levels[dm.test_window_recording])
     assert not set(dm.train_window_recording) & set(dm.val_window_recording)
     with pytest.raises(InputError, match="share"):
         TimeSeriesDataModule(small_scene(), label="board", train_levels=[1, 5], val_levels=[5]).setup()
     with pytest.raises(InputError, match="were not recorded"):
         TimeSeriesDataModule(small_scene(), label="board", train_levels=[1, 2], val_levels=[5]).setup()
+
+
+def sides(dm):
+    return {"train": dm.train_window_recording, "val": dm.val_window_recording, "test": dm.test_window_recording}
+
+
+def test_validation_and_test_divide_the_unseen_levels_by_recording():
+    dm = TimeSeriesDataModule(small_scene(), label="board").setup()
+    labels = dm.recordings.labels
+    windows = sides(dm)
+    # every recording is on exactly one side, and all of its windows with it
+    recordings = {side: set(owner.tolist()) for side, owner in windows.items()}
+    assert not recordings["train"] & recordings["val"] and not recordings["train"] & recordings["test"]
+    assert not recordings["val"] & recordings["test"]
+    assert recordings["train"] | recordings["val"] | recordings["test"] == set(range(len(labels)))
+    assert recordings["val"] == set(dm.val_recordings) and recordings["test"] == set(dm.test_recordings)
+    # half of the 12 unseen-level recordings each side, one per board and level (2 passes each)
+    assert len(dm.val_recordings) == len(dm.test_recordings) == 6
+    for side in ("val", "test"):
+        strata = labels.iloc[sorted(recordings[side])][["board", "force_level_n"]]
+        assert not strata.duplicated().any() and len(strata) == 6
+    summary = dm.summary()
+    assert summary["n_test_recordings"] == 6 and summary["n_test_windows"] == len(dm.y_test) > 0
+    assert summary["test_stratified_by"] == ["board", "force_level_n"]
+    # seeded: the same seed gives the same division
+    again = TimeSeriesDataModule(small_scene(), label="board").setup()
+    np.testing.assert_array_equal(again.test_recordings, dm.test_recordings)
+
+
+def test_test_windows_are_scaled_with_training_statistics():
+    dm = TimeSeriesDataModule(small_scene(), label="board").setup()
+    signals = decimate(dm.recordings.signals[dm.test_recordings], 10)
+    raw, owner = cut_windows(signals, 140, 20, 3, 3)
+    np.testing.assert_allclose(dm.X_test * dm.channel_std + dm.channel_mean, raw, rtol=1e-5, atol=1e-5)
+    np.testing.assert_array_equal(dm.test_window_recording, dm.test_recordings[owner])
+    X_test, y_test = dm.test
+    assert X_test.dtype == np.float32 and y_test.dtype == np.int64 and len(X_test) == len(y_test)
+    real_train = dm.X_train * dm.channel_std + dm.channel_mean
+    np.testing.assert_allclose(real_train.mean(axis=(0, 2)), dm.channel_mean.ravel(), rtol=1e-4, atol=1e-6)
+
+
+def test_one_pass_per_level_falls_back_to_stratifying_by_label():
+    # one recording per board and level: no (board, level) stratum can go to both sides
+    dm = TimeSeriesDataModule(small_scene(passes_per_level=1), label="board").setup()
+    labels = dm.recordings.labels
+    assert dm.summary()["test_stratified_by"] == ["board"]
+    assert sorted(labels["board"][dm.val_recordings]) == sorted(labels["board"][dm.test_recordings])
+    assert len(dm.val_recordings) == len(dm.test_recordings) == 3
+
+
+def test_stratified_split_holds_out_test_before_validation():
+    dm = TimeSeriesDataModule(small_scene(passes_per_level=2), label="board", split="stratified",
+                              test_fraction=0.25, val_fraction=0.2).setup()
+    labels = dm.recordings.labels
+    recordings = {side: set(owner.tolist()) for side, owner in sides(dm).items()}
+    assert not recordings["train"] & recordings["val"] and not recordings["train"] & recordings["test"]
+    assert not recordings["val"] & recordings["test"]
+    assert recordings["train"] | recordings["val"] | recordings["test"] == set(range(len(labels)))
+    assert len(dm.test_recordings) == 9                                  # a quarter of 36
+    assert len(dm.val_recordings) == 6                                   # a fifth of the other 27, rounded up
+    for side in (dm.val_recordings, dm.test_recordings):                 # every board on each side
+        assert set(labels["board"][side]) == set(labels["board"])
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"test_fraction": 0.0}, r"data.test_fraction must be a number in \(0, 1\), got 0.0"),
+    ({"test_fraction": 1.0}, r"data.test_fraction must be a number in \(0, 1\), got 1.0"),
+    ({"test_fraction": "half"}, r"data.test_fraction must be a number in \(0, 1\), got 'half'"),
+    ({"test_fraction": None}, r"data.test_fraction must be a number in \(0, 1\), got None"),
+    ({"split": "stratified", "val_fraction": 1.5}, r"data.val_fraction must be a number in \(0, 1\)"),
+    ({"boards": ["glass/flat"], "val_levels": [5]}, r"1 recording\(s\) at data.val_levels \[5\] N; validation and test"),
+    ({"boards": ["glass/flat"], "test_fraction": 0.9}, "leaves validation or test without a recording of the 2"),
+    ({"split": "stratified", "test_fraction": 0.9}, "data.split=stratified: "),
+])
+def test_bad_test_splits_are_one_line_errors(kwargs, message):
+    scene_kwargs = {"passes_per_level": 1, **({"boards": kwargs.pop("boards")} if "boards" in kwargs else {})}
+    with pytest.raises(InputError, match=message) as error:
+        TimeSeriesDataModule(small_scene(**scene_kwargs), label="board", **kwargs).setup()
+    assert "\n" not in str(error.value)
+
+
+def test_virtual_windows_come_from_training_recordings_only(monkeypatch):
+    import data.timeseries_datamodule as module
+    seen = {}
+
+    def spy(windows, labels, levels, target_levels, **kwargs):
+        seen.update(windows=windows.copy(), levels=levels.copy())
+        return virtual_force_levels(windows, labels, levels, target_levels, **kwargs)
+
+    monkeypatch.setattr(module, "virtual_force_levels", spy)
+    augment = {"enabled": True, "target_levels": [5, 20], "triboelectric_channel": "triboelectric_na",
+               "piezoresistive_channel": "piezoresistive_n"}
+    dm = TimeSeriesDataModule(small_scene(), label="board", force_calibration=CALIBRATION, augment=augment).setup()
+    # Algorithm 1 was handed exactly the real training windows (unscaled), none at 5 or 20 N
+    real_train = dm.X_train[:len(dm.train_window_recording)] * dm.channel_std + dm.channel_mean
+    np.testing.assert_allclose(seen["windows"], real_train, rtol=1e-5, atol=1e-5)
+    assert set(seen["levels"]) == {1, 10, 15, 25} and dm.n_virtual_windows > 0
+    assert len(dm.X_train) == len(dm.train_window_recording) + dm.n_virtual_windows
 
 
 def test_fsr_calibration_reads_the_force_level():
@@ -154,3 +253,5 @@ def test_users_npz_trains_through_hydra(compose_config, tmp_path):
     metrics = run(cfg, tmp_path / "run")
     assert metrics["data"]["classes"] == ["fast", "mid", "slow"]
     assert metrics["val"]["accuracy"] > 0.6  # chance is 1/3
+    assert metrics["data"]["n_test_recordings"] == 12  # data.test_fraction=0.2 of 60 (recordings_npz)
+    assert metrics["test"]["accuracy"] > 0.6

@@ -1,8 +1,10 @@
 """End to end through Hydra: every model config composes with tiny settings and a run writes
 every output; bad configs fail with one line and a non-zero exit."""
 import json
+import os
 import subprocess
 import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -16,6 +18,14 @@ from models.runs.run import run
 ROOT = Path(__file__).resolve().parents[1]
 CLASSIFIERS = {"prcnn", "rescnn", "inceptiontime", "lstm_fcn"}  # tested in test_tsc_models.py
 MODELS = sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml") if p.stem not in CLASSIFIERS)
+# data/atomic.py renders each output into tempfile.mkstemp(prefix=f".{name}.", suffix=suffix) in
+# the output's folder: ".metrics.json.k2x9_a1b.json", ".parity.png.q0w8r7t6.png". A hidden
+# name, then more name, a dot and more: what a crashed or forgotten atomic write leaves behind.
+ATOMIC_TEMP_GLOB = ".?*.?*"
+
+
+def atomic_leftovers(folder: Path) -> list[Path]:
+    return [p for p in folder.rglob(ATOMIC_TEMP_GLOB) if p.is_file()]
 
 
 def test_every_model_config_is_tested():
@@ -25,6 +35,14 @@ def test_every_model_config_is_tested():
 @pytest.mark.parametrize("model", MODELS)
 def test_a_run_writes_every_output(compose_config, tmp_path, model):
     cfg = compose_config(tiny(model))
+    # The leftover check below must be able to fail: a temp name made by data/atomic.py's rule
+    # for each kind of output is caught by it.
+    for name in ("metrics.json", "predictions.csv", "parity.png", "pipeline.pkl"):
+        target = tmp_path / name
+        fd, temp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=target.parent)
+        os.close(fd)
+        assert atomic_leftovers(tmp_path) == [Path(temp)], temp
+        Path(temp).unlink()
     metrics = run(cfg, tmp_path)
 
     figures = {"parity", "residuals"}
@@ -34,12 +52,12 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
         figures |= {"importances", "correlation", "uncertainty", "identifiability"}
     for name in ["metrics.json", "predictions.csv"] + [f"{f}.png" for f in figures]:
         assert (tmp_path / name).stat().st_size > 0, name
-    assert not list(tmp_path.glob(".*.tmp*")) and not list(tmp_path.glob(".metrics*"))  # no leftovers
+    assert atomic_leftovers(tmp_path) == []  # no temp file of an atomic write is left behind
     saved = json.loads((tmp_path / "metrics.json").read_text())
     assert saved["fit_time_s"] > 0
     for split in ("val", "test"):
         assert set(saved[split]) == {"x_mm", "y_mm", "depth_mm", "pressure_pa", "average"}
-        assert set(saved[split]["average"]) == {"r2", "rmse", "mae", "mape_pct"}
+        assert set(saved[split]["average"]) == {"r2", "mape_pct"}  # only unitless scores are averaged
     assert saved == json.loads(json.dumps(metrics))
 
     predictions = pd.read_csv(tmp_path / "predictions.csv")
@@ -100,9 +118,26 @@ def test_bad_config_values_fail_with_a_clear_message(tmp_path, overrides, messag
     assert result.stderr.strip().count("\n") == 0  # exactly one line
 
 
+def snapshot(folder: Path) -> dict[str, bytes | None]:
+    """Every path under `folder` with its content (None for a folder)."""
+    return {str(p.relative_to(folder)): (p.read_bytes() if p.is_file() else None) for p in folder.rglob("*")}
+
+
 def test_train_py_writes_under_the_run_dir_only(tmp_path):
-    result = train(*tiny("decision_tree"), cwd=tmp_path)
+    # A user's working directory with their own files in it, and a run dir elsewhere: train.py
+    # must leave the working directory exactly as it was and put every output in the run dir.
+    work, runs = tmp_path / "work", tmp_path / "runs"
+    (work / "data").mkdir(parents=True)
+    (work / "notes.txt").write_text("my notes\n")
+    (work / "data" / "rig.csv").write_text("r_01_ohm\n1.0\n")
+    before = snapshot(work)
+    result = subprocess.run([sys.executable, str(ROOT / "train.py"), *tiny("decision_tree"), "cost.budget_s=0.05",
+                             f"hydra.run.dir={runs}/run"], capture_output=True, text=True, cwd=work, timeout=300)
     assert result.returncode == 0, result.stderr
-    assert sorted(p.name for p in tmp_path.iterdir()) == ["run"]
-    assert (tmp_path / "run" / "metrics.json").exists() and (tmp_path / "run" / ".hydra" / "config.yaml").exists()
-    assert (tmp_path / "run" / "model.onnx").stat().st_size > 0  # export=onnx is on by default
+    assert snapshot(work) == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["runs", "work"]
+    assert sorted(p.name for p in runs.iterdir()) == ["run"]
+    run_dir = runs / "run"
+    assert (run_dir / "metrics.json").exists() and (run_dir / ".hydra" / "config.yaml").exists()
+    assert (run_dir / "model.onnx").stat().st_size > 0  # export=onnx is on by default
+    assert atomic_leftovers(run_dir) == []

@@ -13,7 +13,8 @@ press-hold-retract. `random` draws positions and depths uniformly.
 
 Each channel is the two-terminal resistance between an electrode pair from a real solve of
 the sheet's current flow (data/physics/sheet_conduction.py); the default pattern measures each electrode
-against its clockwise neighbour, giving channels r_01_ohm ... r_12_ohm.
+against its clockwise neighbour, giving channels r_01_ohm ... r_12_ohm (r_01_norm ... after
+minmax_normalize, whose per-channel minimum and span the table keeps in `normalisation`).
 
 Physics comes only from the listed effects (data/scenes/rubber12_effects.py).
 """
@@ -178,19 +179,19 @@ class Rubber12Scene:
             bar.update(len(state["x_mm"]))
         bar.close()
 
-        state = {"resistance_ohm": readings, "pairs": pairs}
+        state = {"resistance_ohm": readings, "pairs": pairs,
+                 "channels": [f"r_{k + 1:02d}_ohm" for k in range(len(pairs))]}
         for name, fn, params in reading_effects:
             fn(state, random_generator_for(self.seed, name), **params)
 
-        unit = state.get("channel_unit", "ohm")
-        channels = [f"r_{k + 1:02d}_{unit}" for k in range(len(pairs))]
+        channels = state["channels"]  # r_XX_norm after minmax_normalize
         frame = pd.DataFrame(state["resistance_ohm"], columns=channels)
         for column, values in zip(TARGETS, (x, y, depth, pressure)):
             frame[column] = values
         description = {"source": "scene", "scene": self.name, "protocol": self.protocol,
                        "effects": [name for name, _, _ in effects], "n_samples": n,
                        "force_n_range": [float(force.min()), float(force.max())]}
-        return SensorTable(frame, channels, list(TARGETS), groups, description)
+        return SensorTable(frame, channels, list(TARGETS), groups, description, state.get("normalisation"))
 
     def load(self) -> SensorTable:
         """Datamodule entry point: scenes and user tables both `load()` a SensorTable."""

@@ -10,6 +10,7 @@ import numpy as np
 
 from data.physics.contact_mechanics import flat_punch_force_n, mean_pressure_pa, surface_deflection_mm
 from data.errors import InputError
+from data.minmax_scaling import MinMaxScaling
 
 
 def _needs(state, key, effect, provider):
@@ -157,11 +158,13 @@ def outlier_rejection(state, rng, sigmas=3.0):
 def minmax_normalize(state, rng):
     """Min-max normalisation of each channel over the data set, as the lab did: readings become
     unitless in [0, 1] (channel names change from r_XX_ohm to r_XX_norm). A channel that never
-    changes maps to 0."""
-    r = state["resistance_ohm"]
-    low, span = r.min(axis=0), np.ptp(r, axis=0)
-    state["resistance_ohm"] = np.divide(r - low, span, out=np.zeros_like(r), where=span > 0)
-    state["channel_unit"] = "norm"
+    changes maps to 0. The per-channel minimum and span are kept (`state["normalisation"]`, then
+    the SensorTable's `normalisation`): a model trained on these channels applies them to raw
+    ohms when deployed (data/minmax_scaling.py)."""
+    scaling = MinMaxScaling.fit(state["resistance_ohm"], state["channels"])
+    state["resistance_ohm"] = scaling.normalise(state["resistance_ohm"])
+    state["channels"] = [name.removesuffix("_ohm") + "_norm" for name in state["channels"]]
+    state["normalisation"] = scaling
 
 
 FIELD_EFFECTS = {"contact": contact, "hysteresis": hysteresis, "percolation": percolation, "tunneling": tunneling}

@@ -1,4 +1,5 @@
-"""Scores: regression per target (and their uniform average) in physical units, classification
+"""Scores: regression per target in physical units (averaged over targets only where the score
+is unitless: R^2 and MAPE; an average of RMSE would add millimetres to pascals), classification
 as accuracy, macro-F1, log loss, per-class and per-force-level accuracy.
 
 Regression:
@@ -14,6 +15,7 @@ import numpy as np
 from sklearn.metrics import confusion_matrix, f1_score, log_loss, mean_absolute_error, mean_squared_error
 
 METRICS = ("r2", "rmse", "mae", "mape_pct")
+UNITLESS = ("r2", "mape_pct")   # the only scores that may be averaged over targets
 
 
 R2_FLOOR = -1e12
@@ -42,7 +44,7 @@ def _scores(true: np.ndarray, pred: np.ndarray) -> dict:
 
 
 def regression_metrics(y_true, y_pred, target_names: list[str]) -> dict:
-    """{target: {r2, rmse, mae, mape_pct}, ..., "average": uniform mean over targets}."""
+    """{target: {r2, rmse, mae, mape_pct}, ..., "average": {r2, mape_pct} uniform means over targets}."""
     y_true = np.asarray(y_true, dtype=np.float64).reshape(len(y_true), -1)
     y_pred = np.asarray(y_pred, dtype=np.float64).reshape(y_true.shape)
     scores = {name: _scores(y_true[:, k], y_pred[:, k]) for k, name in enumerate(target_names)}
@@ -50,7 +52,7 @@ def regression_metrics(y_true, y_pred, target_names: list[str]) -> dict:
         values = [v for v in values if v is not None]
         return float(np.mean(values)) if values else None
 
-    scores["average"] = {m: mean([scores[t][m] for t in target_names]) for m in METRICS}
+    scores["average"] = {m: mean([scores[t][m] for t in target_names]) for m in UNITLESS}
     return scores
 
 
@@ -60,7 +62,7 @@ def format_table(metrics: dict, splits=("val", "test")) -> str:
     for split in splits:
         for target, row in metrics[split].items():
             lines.append(f"{split:<6}{target:<14}" + "".join(
-                f"{row[m]:>12.4g}" if row[m] is not None else f"{'n/a':>12}" for m in METRICS))
+                f"{row[m]:>12.4g}" if row.get(m) is not None else f"{'—':>12}" for m in METRICS))
     return "\n".join(lines)
 
 

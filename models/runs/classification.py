@@ -2,8 +2,10 @@
 result; then the report side (models/report/classification_report.py) writes it once.
 
 Reports what the seed paper reports (accuracy, validation loss, parameter count) plus macro-F1,
-per-class accuracy, accuracy per validation force level, fit time, a confusion matrix (PNG and
-TensorBoard) and per-epoch curves.
+per-class accuracy, accuracy per force level, fit time, confusion matrices (PNG and TensorBoard)
+and per-epoch curves. Choose on validation, report on test: the model sees validation windows
+for its per-epoch curves and sweeps rank runs by validation accuracy; test windows are only
+predicted once, after fitting, and scored beside validation.
 """
 import time
 from dataclasses import dataclass
@@ -25,12 +27,16 @@ class ClassificationResult:
     proba_val: np.ndarray
     val_window_recording: np.ndarray
     val_levels: np.ndarray | None
+    y_test: np.ndarray
+    proba_test: np.ndarray
+    test_window_recording: np.ndarray
+    test_levels: np.ndarray | None
     pipeline: TimeSeriesPipeline
     hparams: dict
 
 
 def fit_and_evaluate(cfg, datamodule, epoch_callback=None) -> ClassificationResult:
-    (X_train, y_train), (X_val, y_val) = datamodule.train, datamodule.val
+    (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     summary = datamodule.summary()
     model = instantiate(cfg.model)
     if "modalities" in model.get_params():
@@ -38,17 +44,19 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None) -> ClassificationResu
     start, cpu_start = time.perf_counter(), time.process_time()
     model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback)
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
-    proba = model.predict_proba(X_val)
+    proba, proba_test = model.predict_proba(X_val), model.predict_proba(X_test)
     name = type(model.module_).__name__ if hasattr(model, "module_") else type(model).__name__
     n_parameters = int(getattr(model, "n_parameters_", 0))
     metrics = {"model": name, "n_parameters": n_parameters, "fit_time_s": fit_time_s,
                "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, "n_parameters": n_parameters},
                "val": classification_metrics(y_val, proba, datamodule.classes, datamodule.val_levels_per_window),
+               "test": classification_metrics(y_test, proba_test, datamodule.classes, datamodule.test_levels_per_window),
                "data": summary}
     hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed,
                "augment": bool(datamodule.n_virtual_windows), "window": str(summary["window"])}
     return ClassificationResult(metrics, list(datamodule.classes), y_val, proba, datamodule.val_window_recording,
-                                datamodule.val_levels_per_window, timeseries_pipeline(datamodule, model), hparams)
+                                datamodule.val_levels_per_window, y_test, proba_test, datamodule.test_window_recording,
+                                datamodule.test_levels_per_window, timeseries_pipeline(datamodule, model), hparams)
 
 
 def run_classification(cfg, output_dir, datamodule) -> dict:
