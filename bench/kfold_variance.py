@@ -35,6 +35,7 @@ def main(argv=None):
     datamodule = instantiate(cfg.data).setup()
     (X, y), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     targets = datamodule.target_names
+    groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split == "grouped" else None
     predictions = {"single": [], "blend": []}
     r2 = {"single": [], "blend": []}
     seconds = {"single": 0.0, "blend": 0.0}
@@ -42,7 +43,9 @@ def main(argv=None):
         net = instantiate(cfg.model, seed=seed)
         for kind, model in (("single", net), ("blend", KFoldBlend(net, n_folds=args.folds, seed=seed, progress=False))):
             start = time.perf_counter()
-            model.fit(X, y, X_val, y_val) if kind == "single" else model.fit(X, y)
+            # the single net early-stops on the validation split; each fold net carves its own
+            # early-stopping rows from its K - 1 folds (grouped like the split)
+            model.fit(X, y, X_val, y_val) if kind == "single" else model.fit(X, y, groups=groups)
             seconds[kind] += time.perf_counter() - start
             predicted = model.predict(X_test)
             predictions[kind].append(predicted)

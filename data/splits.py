@@ -56,7 +56,8 @@ def kfold_indices(n_rows: int, n_folds: int, seed: int, groups=None):
         folds = splitter.split(np.zeros(n_rows), groups=groups)
     else:
         if n_rows < n_folds:
-            raise InputError(f"K-fold with n_folds={n_folds} needs at least that many rows, got {n_rows}")
+            raise InputError(f"K-fold with n_folds={n_folds} needs at least that many rows, got {n_rows} "
+                             f"sample{'' if n_rows == 1 else 's'}")
         folds = KFold(n_splits=n_folds, shuffle=True, random_state=seed).split(np.zeros(n_rows))
     return [(fit, held) for fit, held in folds], warning
 

@@ -141,7 +141,7 @@ class TimeSeriesDataModule:
             classes = labels[self.label].astype(str).to_numpy()
             try:
                 rest, test = next(StratifiedShuffleSplit(n_splits=1, test_size=self.test_fraction,
-                                                         random_state=self.seed).split(classes, classes))
+                                                         random_state=self.seed).split(np.zeros(len(classes)), classes))
                 train, val = next(StratifiedShuffleSplit(n_splits=1, test_size=self.val_fraction,
                                                          random_state=self.seed).split(rest, classes[rest]))
             except ValueError as error:  # too few recordings per class for the requested shares

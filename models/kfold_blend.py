@@ -15,6 +15,7 @@ import time
 
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted, validate_data
 from tqdm.auto import tqdm
 
@@ -77,6 +78,7 @@ class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         mean = self._fold_predictions(X).mean(axis=0)
         return mean[:, 0] if self.single_output_ else mean
 
+    @available_if(lambda self: hasattr(self.estimator, "predict_proba"))
     def predict_proba(self, X):
         check_is_fitted(self, "models_")
         return np.mean([m.predict_proba(X) for m in self.models_], axis=0)

@@ -17,6 +17,7 @@ else from validation residuals.
 `weights="stacking"` replaces the seed's rule, which gives every reasonable candidate about a
 third and can end worse than its best candidate, by a super learner (see ValidationWeightedBlend).
 """
+import copy
 import time
 
 import numpy as np
@@ -121,21 +122,35 @@ class ValidationWeightedBlend(IntervalMixin, RegressorMixin, BaseEstimator):
             val_predictions.append(predicted)
             self.models_[name] = model
         self.val_r2_ = np.asarray(scores)
-        models, val_predictions = list(self.models_.values()), np.stack(val_predictions)
+        self.val_predictions_, self.y_val_, self.y_fit_ = np.stack(val_predictions), y_val2, y2
+        self._choose_weights()
+        return self
+
+    def _choose_weights(self) -> None:
+        """weights_ (and sigma_data) from the fitted candidates by the configured rule."""
+        models, y2, y_val2 = list(self.models_.values()), self.y_fit_, self.y_val_
         self.stacking_fallback_targets_ = []
         if self.weights == "paper":
             ranking = self.val_r2_ if self.per_target else np.repeat(
                 np.nanmean(self.val_r2_, axis=1, keepdims=True), self.val_r2_.shape[1], axis=1)
             self.weights_, self.fallback_targets_ = validation_weights(ranking, self.mode)
         else:
-            self.weights_, self.fallback_targets_ = self._stacking(models, y2, val_predictions, y_val2), []
-        self.val_residual_ = ((y_val2[None] - val_predictions) ** 2).mean(axis=1)
+            self.weights_, self.fallback_targets_ = self._stacking(models, y2, self.val_predictions_, y_val2), []
+        self.val_residual_ = ((y_val2[None] - self.val_predictions_) ** 2).mean(axis=1)
         if all(hasattr(m, "out_of_fold_") for m in models):
             blended = sum(self.weights_[i] * m.out_of_fold_ for i, m in enumerate(models))
             self.data_variance_ = ((y2 - blended) ** 2).mean(axis=0)
         else:
             self.data_variance_ = (self.weights_ * self.val_residual_).sum(axis=0)
-        return self
+
+    def reweighted(self, weights: str) -> "ValidationWeightedBlend":
+        """A copy that shares the fitted candidates and weighs them by another rule (for
+        comparing rules on the same fit: bench/blend_weights.py)."""
+        check_is_fitted(self, "models_")
+        other = copy.copy(self)
+        other.weights = weights
+        other._choose_weights()
+        return other
 
     def _stacking(self, models, y, val_predictions, y_val) -> np.ndarray:
         missing = [n for n, m in self.models_.items() if not hasattr(m, "out_of_fold_")]

@@ -2,6 +2,7 @@
 import numpy as np
 import pytest
 from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.metrics import r2_score
 
 from data.errors import InputError
 from models.report.analysis import identifiability_map
@@ -149,3 +150,79 @@ def test_selection_is_deterministic_under_the_seed():
     np.testing.assert_array_equal(a.weights_, b.weights_)
     # forests sum their trees across threads in arrival order: equal to the last bit or two
     np.testing.assert_allclose(a.predict_std(X[500:])[1], b.predict_std(X[500:])[1], rtol=1e-12)
+
+
+class FitRecorder(Constant):
+    """Remembers whether fit was shown validation rows (column 0 of X holds the row number)."""
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
+        self.rows_ = np.asarray(X)[:, 0].astype(int)
+        self.val_rows_ = None if X_val is None else np.asarray(X_val)[:, 0].astype(int)
+        return super().fit(X, y)
+
+
+def test_fold_models_never_see_their_held_out_fold():
+    """The out-of-fold predictions (sigma_data, stacking) come from rows the fold model neither
+    trained nor early-stopped on."""
+    X, y = data(120)
+    X[:, 0] = np.arange(len(X))
+    blend = KFoldBlend(FitRecorder(), n_folds=4, progress=False).fit(X, y, X[:10], y[:10])
+    for model in blend.models_:
+        assert model.val_rows_ is None  # no validation rows handed down: a net carves its own
+        assert len(model.rows_) == 90
+
+
+def test_a_net_carves_its_early_stopping_rows_by_group():
+    from models.resmlp_regressor import ResMLPRegressor
+    from data.splits import carve_validation
+    groups = np.repeat(np.arange(30), 4)
+    fit_rows, val_rows = carve_validation(len(groups), 0.2, seed=3, groups=groups)
+    assert not set(groups[fit_rows]) & set(groups[val_rows]) and len(val_rows) > 0
+    X, y = data(120)
+    net = ResMLPRegressor(widths=(8,), dropouts=(0.0,), max_epochs=3, progress=False).fit(X, y, groups=groups)
+    assert net.n_epochs_ == 3
+
+
+def hard_candidates(seed=0):
+    """Three K-fold candidates of different strength: stacking must beat or equal the best."""
+    return {"trees": KFoldBlend(trees(seed), n_folds=3, seed=seed, progress=False),
+            "shallow": KFoldBlend(TreeRegressor(kind="decision_tree", max_depth=3, max_features=None, seed=seed),
+                                  n_folds=3, seed=seed, progress=False),
+            "constant": KFoldBlend(Constant(0.3), n_folds=3, seed=seed, progress=False)}
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_stacking_is_never_worse_than_its_best_candidate_on_validation(seed):
+    X, y = data(500, seed=seed, noise=0.3)
+    blend = ValidationWeightedBlend(hard_candidates(seed), weights="stacking").fit(X[:300], y[:300], X[300:400], y[300:400])
+    val_r2 = np.array([r2_score(y[300:400][:, k], blend.predict(X[300:400])[:, k]) for k in range(2)])
+    assert (val_r2 >= blend.val_r2_.max(axis=0) - 1e-12).all()
+    np.testing.assert_allclose(blend.weights_.sum(axis=0), 1.0)
+    assert (blend.weights_ >= 0).all() and blend.weights_[2].max() < 0.05  # the constant is left out
+    # the seed's rule gives the useless constant a share whenever its R^2 is positive; stacking
+    # is at least as good on validation
+    paper = blend.reweighted("paper")
+    paper_r2 = np.array([r2_score(y[300:400][:, k], paper.predict(X[300:400])[:, k]) for k in range(2)])
+    assert (val_r2 >= paper_r2 - 1e-12).all()
+
+
+def test_stacking_weights_solve_the_constrained_least_squares():
+    from models.weighted_blend import stacking_weights
+    rng = np.random.default_rng(0)
+    truth = rng.standard_normal(400)
+    good, noisy = truth + 0.1 * rng.standard_normal(400), truth + 1.0 * rng.standard_normal(400)
+    weights = stacking_weights(np.column_stack([good, noisy, -truth]), truth)
+    assert weights.sum() == pytest.approx(1.0) and (weights >= 0).all()
+    # inverse-variance weighting of two independent unbiased predictors: 1/0.01 : 1/1
+    assert weights[0] == pytest.approx(100 / 101, abs=0.02) and weights[2] < 0.02
+
+
+def test_stacking_needs_out_of_fold_predictions():
+    X, y = data(200)
+    with pytest.raises(InputError, match="needs out-of-fold predictions.*single"):
+        ValidationWeightedBlend({"single": trees()}, weights="stacking").fit(X, y)
+
+
+def test_the_blend_carves_its_own_validation_rows():
+    X, y = data(200)
+    blend = ValidationWeightedBlend({"a": trees(), "b": Constant()}).fit(X, y)
+    assert len(blend.y_val_) == 30 and blend.weights_.shape == (2, 2)

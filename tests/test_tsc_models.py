@@ -107,6 +107,7 @@ def test_baselines_train_through_hydra(compose_config, tmp_path, model):
     metrics = run(cfg, tmp_path / "run")
     chance = 1 / 10
     assert metrics["val"]["accuracy"] > 5 * chance, metrics["val"]["accuracy"]
+    assert metrics["test"]["accuracy"] > 5 * chance, metrics["test"]["accuracy"]
     assert np.isfinite(metrics["val"]["loss"]) and np.isfinite(metrics["test"]["loss"])
     assert_predictions_match_metrics(tmp_path / "run", metrics)
 

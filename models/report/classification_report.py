@@ -49,7 +49,7 @@ def write_classification_report(result, output_dir, logger) -> None:
     ], ignore_index=True)
     atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
     for split, figure in figures.items():
-        atomic_write(output_dir / FIGURE_FILES[split], lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
+        atomic_write(output_dir / FIGURE_FILES[split], lambda tmp, fig=figure: fig.savefig(tmp, dpi=110, format="png"))
         plots.plt.close(figure)
     save_pipeline(result.pipeline, output_dir / "pipeline.pkl")
     atomic_write_json(output_dir / "metrics.json", metrics)

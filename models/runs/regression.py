@@ -41,11 +41,15 @@ def _model_size(model) -> dict:
 
 
 def _selection_report(model, targets) -> dict:
-    report = {"candidates": model.names_, "mode": model.mode, "per_target": model.per_target,
+    report = {"candidates": model.names_, "weights_rule": model.weights, "mode": model.mode,
+              "per_target": model.per_target,
               "selected": model.selected_(),
               "weights": {n: dict(zip(targets, map(float, model.weights_[i]))) for i, n in enumerate(model.names_)},
               "val_r2": {n: dict(zip(targets, map(float, model.val_r2_[i]))) for i, n in enumerate(model.names_)},
               "fallback_targets": [targets[k] for k in model.fallback_targets_],
+              # stacking: targets where the stacked blend scored below its best candidate on
+              # validation, so that candidate alone serves the target
+              "stacking_fallback_targets": [targets[k] for k in model.stacking_fallback_targets_],
               "fit_time_s": model.fit_time_s_}
     folds = {n: m.fold_fit_time_s_ for n, m in model.models_.items() if hasattr(m, "fold_fit_time_s_")}
     if folds:
