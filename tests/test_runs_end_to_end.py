@@ -100,7 +100,7 @@ def without_timings(value):
 
 
 # the whole run, feature ablation included, for the trees; the net's ablation would be 7 more fits
-SMALL = {"extra_trees": [], "resmlp": ["model.widths=[16]", "model.dropouts=[0.1]", "trainer.max_epochs=3",
+SMALL = {"extra_trees": ["analysis.ablation=true"], "resmlp": ["model.widths=[16]", "model.dropouts=[0.1]", "trainer.max_epochs=3",
                                        "analysis.ablation=false"]}
 
 
@@ -147,7 +147,11 @@ def test_recordings_table_trains_end_to_end(compose_config, tmp_path):
     metrics = run(cfg, tmp_path / "run")
     saved = json.loads((tmp_path / "run" / "metrics.json").read_text())
     assert saved["val"]["accuracy"] == metrics["val"]["accuracy"]
-    assert 0.0 <= saved["val"]["accuracy"] <= 1.0 and np.isfinite(saved["val"]["loss"])
+    rows = pd.read_csv(tmp_path / "run" / "predictions.csv")
+    for split in ("val", "test"):  # the reported accuracy is what the written predictions score
+        part = rows[rows["split"] == split]
+        assert len(part) and saved[split]["accuracy"] == pytest.approx((part["true"] == part["predicted"]).mean())
+    assert np.isfinite(saved["val"]["loss"])
     assert set(saved["val"]["accuracy_by_force_level_n"]) == {"5.0", "20.0"}
     assert len(saved["val"]["per_class_accuracy"]) == 3
     data = saved["data"]
