@@ -45,7 +45,8 @@ def validation_weights(scores: np.ndarray, mode: str = "weighted"):
         positive = positive / np.maximum(positive.sum(axis=0, keepdims=True), 1)
     total = positive.sum(axis=0)
     fallback = np.flatnonzero(total <= 0)
-    weights = np.divide(positive, total, out=np.full_like(positive, 1.0 / len(scores)), where=total > 0)
+    with np.errstate(under="ignore"):  # a denormal R^2 (5e-324) over a total of 2 is a weight of 0
+        weights = np.divide(positive, total, out=np.full_like(positive, 1.0 / len(scores)), where=total > 0)
     return weights, fallback
 
 
