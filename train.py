@@ -4,6 +4,7 @@ Thin on purpose: Hydra composes the config, models/runs/run.py does the work, ex
 ONNX file, and a user-input problem ends in one line on stderr and exit code 2 instead of a
 traceback.
 """
+import logging
 import os
 import shutil
 import sys
@@ -14,6 +15,7 @@ from pathlib import Path
 # processes (submitit, joblib) inherit it through PYTHONPATH.
 ROOT = Path(__file__).resolve().parent
 STAGE = ".staging"
+log = logging.getLogger("train")
 os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), os.environ.get("PYTHONPATH")]))
 
 import hydra
@@ -46,6 +48,7 @@ def main(cfg: DictConfig) -> float:
         for item in sorted(stage.iterdir()):
             os.replace(item, output_dir / item.name)
         stage.rmdir()
+        log.info("outputs in %s", output_dir)
     except BaseException as error:
         shutil.rmtree(stage, ignore_errors=True)
         message = str(error).splitlines()[0] if str(error) else type(error).__name__

@@ -15,6 +15,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from hydra import compose, initialize_config_dir  # noqa: E402
 from omegaconf import OmegaConf  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -26,7 +27,9 @@ from data.scenes.rubber12 import Rubber12Scene  # noqa: E402
 
 
 def effects_of(name):
-    return OmegaConf.to_container(OmegaConf.load(ROOT / "configs" / "scene" / f"{name}.yaml").effects)
+    """The effects a scene variant lists, as Hydra composes it (variants inherit their base)."""
+    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+        return OmegaConf.to_container(compose("config", overrides=[f"scene={name}"]).scene.effects)
 
 
 def rubber12_figure():

@@ -12,6 +12,7 @@ import sys
 import time
 from pathlib import Path
 
+from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
@@ -26,9 +27,12 @@ SCENES = {"rubber12_lab": ("rubber12_minimal", "n_samples", 1),
 
 
 def load(name: str, n_samples: int, effects=None):
-    cfg = OmegaConf.load(ROOT / "configs" / "scene" / f"{name}.yaml")
+    """The scene config `name` as Hydra composes it (variants inherit their base through
+    `defaults:`), sized to about `n_samples` samples."""
+    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+        composed = compose("config", overrides=[f"scene={name}", "seed=0"])
+    cfg = OmegaConf.create(OmegaConf.to_container(composed.scene, resolve=True))
     size_key, per_unit = next((key, unit) for full, (minimal, key, unit) in SCENES.items() if name in (full, minimal))
-    cfg.seed = 0
     cfg[size_key] = max(1, n_samples // per_unit)
     if "progress" in cfg:
         cfg.progress = False

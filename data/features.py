@@ -29,6 +29,8 @@ cannot cancel eps and divide by zero; for non-negative readings it is r_{i+1} it
 One implementation: the operators are a torch module (`PhysicsFeatures`), called on numpy
 arrays in training (`compute_features`) and on tensors inside the exported ONNX graph.
 """
+from functools import lru_cache
+
 import numpy as np
 import torch
 from torch import nn
@@ -120,4 +122,10 @@ def compute_features(readings, groups) -> np.ndarray:
     if r.ndim != 2 or r.shape[1] < 2:
         raise InputError(f"features need a 2-D array with at least 2 channels, got shape {r.shape}")
     with torch.no_grad():
-        return PhysicsFeatures(groups)(torch.from_numpy(np.ascontiguousarray(r))).numpy()
+        return _module(tuple(enabled_groups(groups)))(torch.from_numpy(np.ascontiguousarray(r))).numpy()
+
+
+@lru_cache(maxsize=16)
+def _module(groups: tuple[str, ...]) -> PhysicsFeatures:
+    """One module per choice of groups: building it costs more than running it on one sample."""
+    return PhysicsFeatures(groups)

@@ -15,6 +15,7 @@ import numpy as np
 import torch
 
 from data.atomic import atomic_write_json
+from data.errors import InputError
 from export.onnx_predictor import OnnxPredictor
 from models.deployable import RegressionPipeline, load_pipeline
 
@@ -66,6 +67,8 @@ def measure(pipeline, model_path=None, budget_s: float = 1.0) -> dict:
 def record_costs(run_dir, model_file: str = "model.onnx", budget_s: float = 1.0) -> dict:
     """Measure a finished run's inference costs and merge them into metrics.json and TensorBoard."""
     run_dir = Path(run_dir)
+    if not budget_s > 0:
+        raise InputError(f"cost.budget_s must be a positive number of seconds, got {budget_s}")
     cost = measure(load_pipeline(run_dir / "pipeline.pkl"), run_dir / model_file, budget_s)
     metrics = json.loads((run_dir / "metrics.json").read_text())
     metrics.setdefault("cost", {}).update(cost)

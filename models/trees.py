@@ -51,8 +51,9 @@ class TreeRegressor(RegressorMixin, BaseEstimator):
         self.estimator_ = MultiOutputRegressor(base) if self.per_output and y.ndim == 2 else base
         self.estimator_.fit(X, y)
         # Predict on one thread: parallel forests add their trees' outputs in the order threads
-        # finish, so the same run would differ in the last bit; a batch-1 prediction is also
-        # faster without the thread pool. Fitting above stays parallel (each tree is seeded).
+        # finish, so the same run would differ in the last bit (the eager prediction of a big
+        # forest gets slower; the exported ONNX model does not). Fitting stays parallel (each
+        # tree is seeded).
         self.estimator_.set_params(**{key: 1 for key in self.estimator_.get_params() if key.endswith("n_jobs")})
         return self
 

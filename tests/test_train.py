@@ -141,3 +141,19 @@ def test_train_py_writes_under_the_run_dir_only(tmp_path):
     assert (run_dir / "metrics.json").exists() and (run_dir / ".hydra" / "config.yaml").exists()
     assert (run_dir / "model.onnx").stat().st_size > 0  # export=onnx is on by default
     assert atomic_leftovers(run_dir) == []
+
+
+@pytest.mark.parametrize("failing_step, overrides", [
+    ("export", ["export.opset=1"]),                               # no ONNX exporter supports opset 1
+    ("cost measurement", ["cost.budget_s=-1", "export=none"]),    # a negative budget is refused
+])
+def test_a_run_that_fails_late_leaves_nothing_that_looks_finished(tmp_path, failing_step, overrides):
+    run_dir = tmp_path / "run"
+    result = subprocess.run([sys.executable, str(ROOT / "train.py"), *tiny("decision_tree"), *overrides,
+                             f"hydra.run.dir={run_dir}"], capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    assert result.returncode != 0, f"the {failing_step} step did not fail"
+    left = sorted(p.name for p in run_dir.iterdir())
+    assert "error.txt" in left and (run_dir / "error.txt").read_text().strip()
+    # training and the report succeeded before the failure, yet no finished-run artefact is left
+    for artefact in ("metrics.json", "pipeline.pkl", "model.onnx", "predictions.csv", "tensorboard", ".staging"):
+        assert artefact not in left, (failing_step, left)

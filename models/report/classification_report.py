@@ -59,4 +59,3 @@ def write_classification_report(result, output_dir, logger) -> None:
              metrics["model"], metrics["n_parameters"], metrics["fit_time_s"], val["accuracy"], val["macro_f1"],
              val["loss"], val.get("accuracy_by_force_level_n"), test["accuracy"], test["macro_f1"], test["loss"],
              test.get("accuracy_by_force_level_n"))
-    log.info("outputs in %s", output_dir)

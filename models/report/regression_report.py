@@ -65,7 +65,7 @@ def _log_summary(metrics, output_dir) -> None:
     for warning in metrics.get("warnings", []):
         log.warning(warning)
     if "selection" in metrics:
-        log.info("validation weights (per target): %s",
+        log.info("blend weights (per target): %s",
                  {n: {t: round(w, 3) for t, w in row.items()} for n, row in metrics["selection"]["weights"].items()})
     if "uncertainty" in metrics:
         u = metrics["uncertainty"]
@@ -75,7 +75,6 @@ def _log_summary(metrics, output_dir) -> None:
     if "ablation" in metrics:
         log.info("feature-group ablation (%s), change in test R2:\n%s", metrics["ablation"]["model"],
                  format_ablation(metrics["ablation"]))
-    log.info("outputs in %s", output_dir)
 
 
 def write_regression_report(result, output_dir, logger, feature_names) -> None:
