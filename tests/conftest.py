@@ -39,7 +39,7 @@ def tiny(model: str) -> list[str]:
         overrides.append("model.n_estimators=10")
     if model == "blend":  # 160 presses leave 24 calibration rows, enough for a 95 % quantile
         overrides = [o for o in overrides if not o.startswith("scene.n_samples")]
-        overrides += ["scene.n_samples=160", "data.n_folds=2", "analysis.progress=false",
+        overrides += ["scene.n_samples=160", "data.n_folds=2", "analysis.progress=false", "analysis.ablation=true",
                       "model.candidates.random_forest.estimator.n_estimators=10",
                       "model.candidates.extra_trees.estimator.n_estimators=10"]
     return overrides
