@@ -6,6 +6,8 @@ from pathlib import Path
 
 import pytest
 from hydra import compose, initialize_config_dir
+from hydra.utils import get_object
+from omegaconf import OmegaConf
 
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("data", "models", "export")
@@ -36,7 +38,7 @@ def imported_roots(module: str) -> set[str]:
 
 @pytest.mark.parametrize("module", modules())
 def test_every_module_imports(module):
-    importlib.import_module(module)
+    assert importlib.import_module(module).__name__ == module
 
 
 def test_imports_flow_one_way():
@@ -98,11 +100,28 @@ def config_choices() -> list[list[str]]:
 def test_every_config_file_composes(overrides):
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
         cfg = compose(config_name="config", overrides=overrides, return_hydra_config=True)
-    # resolve everything a run would read, interpolations included
-    from omegaconf import OmegaConf
-    for key in ("data", "model", "scene", "trainer"):
+    choices = cfg.hydra.runtime.choices
+    for override in overrides:  # the option asked for is the one composed
+        group, option = override.lstrip("+").split("=", 1)
+        assert choices[group] == option, (group, choices.get(group))
+    # resolve what a run reads, interpolations included, and every _target_ must import
+    targets = []
+    for key in ("data", "model", "scene", "trainer", "logger"):
         if key in cfg:
-            OmegaConf.to_container(cfg[key], resolve=True, throw_on_missing=False)
+            targets += list(_targets(OmegaConf.to_container(cfg[key], resolve=True, throw_on_missing=False)))
+    for target in targets:
+        assert callable(get_object(target)), target
+
+
+def _targets(node):
+    if isinstance(node, dict):
+        if isinstance(node.get("_target_"), str):
+            yield node["_target_"]
+        for value in node.values():
+            yield from _targets(value)
+    elif isinstance(node, list):
+        for value in node:
+            yield from _targets(value)
 
 
 def test_every_yaml_is_reached_by_the_composition_test():
