@@ -28,6 +28,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from data.errors import InputError
 from data.splits import carve_validation
+from models.kfold_blend import KFoldBlend
 from models.uncertainty import IntervalMixin
 
 MODES = ("weighted", "argmax")
@@ -99,6 +100,11 @@ class ValidationWeightedBlend(IntervalMixin, RegressorMixin, BaseEstimator):
             raise InputError(f"model.weights must be one of {', '.join(WEIGHTS)}, got '{self.weights}'")
         if self.weights == "stacking" and self.mode != "weighted":
             raise InputError("model.mode=argmax keeps one candidate; it does not combine with model.weights=stacking")
+        missing = [n for n, e in self.candidates.items() if not isinstance(e, KFoldBlend)]
+        if self.weights == "stacking" and missing:  # said before minutes of fitting, not after
+            raise InputError(f"model.weights=stacking needs out-of-fold predictions, which candidate(s) "
+                             f"{', '.join(missing)} lack: K-fold blend them (models/kfold_blend.py) or use "
+                             "model.weights=paper")
         X, y = validate_data(self, X, y, multi_output=True, y_numeric=True, dtype=np.float64)
         self.single_output_ = y.ndim == 1
         if X_val is None or y_val is None:  # carve validation rows from the training rows
@@ -154,11 +160,6 @@ class ValidationWeightedBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         return other
 
     def _stacking(self, models, y, val_predictions, y_val) -> np.ndarray:
-        missing = [n for n, m in self.models_.items() if not hasattr(m, "out_of_fold_")]
-        if missing:
-            raise InputError(f"model.weights=stacking needs out-of-fold predictions, which candidate(s) "
-                             f"{', '.join(missing)} lack: K-fold blend them (models/kfold_blend.py) or use "
-                             "model.weights=paper")
         out_of_fold = np.stack([m.out_of_fold_ for m in models], axis=-1)       # (n, targets, models)
         if self.per_target:
             weights = np.column_stack([stacking_weights(out_of_fold[:, k], y[:, k]) for k in range(y.shape[1])])
