@@ -59,8 +59,10 @@ def main(cfg: DictConfig) -> float:
         if HydraConfig.get().mode == RunMode.MULTIRUN:  # one bad job must not end the sweep
             return float("nan")
         sys.exit(2)
-    val = metrics["val"]  # the value a Hydra sweeper would optimise: validation, never test
-    return val["average"]["r2"] if "average" in val else val["accuracy"]
+    val = metrics.get("val", {})  # the value a Hydra sweeper would optimise: validation, never test
+    if "average" in val:
+        return val["average"]["r2"]
+    return val.get("accuracy", float("nan"))
 
 
 def check_overrides(argv: list[str]) -> None:
