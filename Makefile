@@ -16,10 +16,10 @@ train: install                ## python train.py on the default simulated scene 
 	$(PY) train.py $(ARGS)
 
 test: install                 ## the default test suite (< 10 min on 2 cores)
-	$(PY) -m pytest -q -m "not slow"
+	$(PY) -m pytest -q -m "not slow" --durations=15
 
 test-slow: install            ## the slow tests only
-	$(PY) -m pytest -q -m slow
+	$(PY) -m pytest -q -m slow --durations=5
 
 clean:
 	rm -rf $(VENV) outputs multirun .pytest_cache

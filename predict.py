@@ -33,16 +33,17 @@ def parse(argv) -> dict:
 
 
 def thread_count(text: str) -> int | None:
-    """`threads=N`: N intra-op threads for onnxruntime; 0 (or no argument) keeps its default."""
+    """`threads=N`: N intra-op threads for onnxruntime; 0 = its default (one per core). Without
+    the argument: TOUCHSTONE_THREADS if set, else onnxruntime's default."""
     if not (text.isascii() and text.isdigit()):  # digits only: no sign, no decimal point, not empty
         raise InputError(f"threads must be a non-negative integer (0 = onnxruntime's default), got {text!r}")
-    return int(text) or None
+    return int(text)
 
 
 def main(argv=None) -> int:
     try:
         args = parse(sys.argv[1:] if argv is None else argv)
-        predictor = OnnxPredictor(args["model"], threads=thread_count(args.get("threads", "0")))
+        predictor = OnnxPredictor(args["model"], threads=thread_count(args["threads"]) if "threads" in args else None)
         frame = read_table_file(args["input"])
         if predictor.kind == "regression":
             result = predictor.predict_table(frame, args["input"])

@@ -6,6 +6,7 @@ traceback.
 """
 import logging
 import os
+import re
 import shutil
 import sys
 from pathlib import Path
@@ -21,14 +22,22 @@ os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), os.environ.g
 import hydra
 from hydra import compose, initialize_config_dir
 from hydra.core.hydra_config import HydraConfig
+from hydra.errors import InstantiationException
 from hydra.types import RunMode
-from omegaconf import DictConfig
+from omegaconf import DictConfig, OmegaConf
 
 from data.atomic import atomic_write_text
+from data.config_checks import check_target_keys
 from data.errors import InputError
-from export.latency import record_costs
-from export.run_export import export_run
-from models.runs.run import run
+from data.progress import phase
+from data.split_settings import check_split_settings
+from data.threads import apply_threads, resolve_threads
+# torch, scikit-learn and onnx are imported in main(), after the config has been checked (a typo
+# is reported in about a second) and the thread setting applied (pools start at the right size).
+
+# Run folders are unique even for runs started in the same second: the time plus the process id
+# (unique among running processes), so a folder's .hydra/ always describes the run beside it.
+OmegaConf.register_new_resolver("process_id", os.getpid, replace=True)
 
 
 @hydra.main(version_base="1.3", config_path="configs", config_name="config")
@@ -40,11 +49,22 @@ def main(cfg: DictConfig) -> float:
     stage = output_dir / STAGE
     shutil.rmtree(stage, ignore_errors=True)
     try:
-        metrics = run(cfg, stage)
+        launcher = HydraConfig.get().launcher
+        apply_threads(resolve_threads(cfg.threads, launcher.get("n_jobs", 1) if "joblib" in str(launcher.get("_target_", "")) else 1))
+        with phase("start-up (imports)"):
+            from export.latency import record_costs
+            from export.run_export import export_run
+            from models.runs.run import run
+        try:
+            metrics = run(cfg, stage)
+        except InstantiationException as error:
+            raise as_input_error(error) from None
         if cfg.export.enabled:
-            export_run(stage, cfg.export.opset, cfg.export.file)
+            with phase("ONNX export"):
+                export_run(stage, cfg.export.opset, cfg.export.file)
         if cfg.cost.measure_latency:
-            metrics = record_costs(stage, cfg.export.file, cfg.cost.budget_s)
+            with phase("latency measurement"):
+                metrics = record_costs(stage, cfg.export.file, cfg.cost.budget_s)
         for item in sorted(stage.iterdir()):
             os.replace(item, output_dir / item.name)
         stage.rmdir()
@@ -53,6 +73,7 @@ def main(cfg: DictConfig) -> float:
         shutil.rmtree(stage, ignore_errors=True)
         message = str(error).splitlines()[0] if str(error) else type(error).__name__
         atomic_write_text(output_dir / "error.txt", f"{message}\n")
+        log.error("run failed: %s", message)
         if not isinstance(error, InputError):
             raise
         print(f"error: {error}", file=sys.stderr)
@@ -65,15 +86,46 @@ def main(cfg: DictConfig) -> float:
     return val.get("accuracy", float("nan"))
 
 
+def as_input_error(error: InstantiationException) -> Exception:
+    """A config key the target does not take (`+scene.sparkle=1`) or a value of the wrong type
+    reaches the constructor as a TypeError inside Hydra's InstantiationException: name the key."""
+    text = str(error)
+    where = re.search(r"full_key: (\S+)", text)
+    unexpected = re.search(r"unexpected keyword argument '(\w+)'", text)
+    if unexpected:
+        node = where.group(1) if where else "config"
+        node = "scene" if node == "data.source" else node  # data=scene passes the scene as data.source
+        return InputError(f"{node} has no parameter '{unexpected.group(1)}' (remove it or check its spelling)")
+    cause = error.__cause__
+    if isinstance(cause, InputError):
+        return cause
+    if isinstance(cause, (TypeError, ValueError)):
+        return InputError(f"{where.group(1) if where else 'config'}: {str(cause).splitlines()[0]}")
+    return error
+
+
 def check_overrides(argv: list[str]) -> None:
-    """Compose the config once up front so that an unknown option or key, or a malformed
-    override, is one line and exit code 2 like every other input error (Hydra would print a
-    multi-line message and exit 1). Sweeps and Hydra's own flags are left to Hydra."""
+    """Compose the config once up front so that an unknown option or key (also one added with `+`
+    that its target does not take), a malformed override, a missing mandatory value, a bad thread
+    count or an impossible split is one line and exit code 2 like every other input error (Hydra
+    would print a multi-line message and exit 1), in about a second. Sweeps and Hydra's own flags
+    are left to Hydra."""
     if any(arg.startswith("-") for arg in argv):
         return
     try:
         with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
-            compose(config_name="config", overrides=argv, return_hydra_config=True)
+            cfg = compose(config_name="config", overrides=argv)
+        missing = [key for key in OmegaConf.missing_keys(cfg)]
+        if missing:
+            raise InputError(f"{missing[0]} needs a value (add {missing[0]}=...)")
+        resolve_threads(cfg.threads)
+        check_target_keys(cfg)
+        if cfg.data.get("_target_", "").startswith("data.regression_datamodule."):
+            check_split_settings(cfg.data.n_folds, cfg.data.test_fraction, cfg.data.val_fraction,
+                                 cfg.data.calibration_fraction)
+    except InputError as error:
+        print(f"error: {error}", file=sys.stderr)
+        sys.exit(2)
     except Exception as error:  # Hydra's and OmegaConf's composition errors
         message = " ".join(str(error).split("Config search path")[0].split())
         print(f"error: {message}", file=sys.stderr)

@@ -13,6 +13,7 @@ import numpy as np
 from sklearn.preprocessing import StandardScaler
 
 from data.features import compute_features, feature_names
+from data.split_settings import check_split_settings
 from data.splits import SPLIT_NOTES, holdout
 from data.errors import InputError
 from data.tables import SensorTable, TableSource
@@ -31,6 +32,7 @@ class RegressionDataModule:
         self.seed = seed
 
     def setup(self) -> "RegressionDataModule":
+        check_split_settings(self.n_folds, self.test_fraction, self.val_fraction, self.calibration_fraction)
         table = self.source.load()
         if not isinstance(table, SensorTable):
             name = getattr(self.source, "name", type(self.source).__name__)

@@ -32,6 +32,12 @@ def read_table_file(path: str | Path) -> pd.DataFrame:
     return frame
 
 
+def where(source, row: int) -> str:
+    """A data row as a user finds it: the file line of a CSV (its header is line 1), else the
+    1-based row number."""
+    return f"line {row + 2}" if str(source).lower().endswith(".csv") else f"row {row + 1}"
+
+
 def check_numeric_columns(frame: pd.DataFrame, columns: list[str], what: str, source: str) -> None:
     """Every named column exists, is numeric and finite; otherwise one line naming the column."""
     missing = [c for c in columns if c not in frame.columns]
@@ -44,9 +50,9 @@ def check_numeric_columns(frame: pd.DataFrame, columns: list[str], what: str, so
         if bad.any():
             row = int(np.flatnonzero(bad.to_numpy())[0])
             raise InputError(f"{source}: {what} column '{column}' has a non-numeric value "
-                             f"{frame[column].iloc[row]!r} in row {row}")
+                             f"{frame[column].iloc[row]!r} in {where(source, row)}")
         finite = np.isfinite(values.to_numpy(dtype=np.float64))
         if not finite.all():
             row = int(np.flatnonzero(~finite)[0])
             raise InputError(f"{source}: {what} column '{column}' has a missing or infinite "
-                             f"value in row {row}")
+                             f"value in {where(source, row)}")

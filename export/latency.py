@@ -50,7 +50,7 @@ def measure(pipeline, model_path=None, budget_s: float = 1.0) -> dict:
     one = batch[:1]
     runners = {"eager": pipeline.predict_raw}
     if model_path is not None and Path(model_path).is_file():
-        for name, threads in (("onnx_1_thread", 1), ("onnx_default", None)):
+        for name, threads in (("onnx_1_thread", 1), ("onnx_default", 0)):
             predictor = OnnxPredictor(model_path, threads=threads)
             runners[name] = predictor.predict_array if isinstance(pipeline, RegressionPipeline) else predictor.predict_windows
     cost = {"cores": os.cpu_count(), "torch_threads": torch.get_num_threads(),

@@ -13,11 +13,16 @@ import pandas as pd
 
 from data.errors import InputError
 from data.table_files import check_numeric_columns
+from data.threads import configured_threads
 
 
 class OnnxPredictor:
     def __init__(self, path, threads: int | None = None):
+        """threads: intra-op threads; None = the Touchstone setting in force (data/threads.py),
+        0 = onnxruntime's own default (one per core)."""
         options = ort.SessionOptions()
+        if threads is None:
+            threads = configured_threads()
         if threads:
             options.intra_op_num_threads = threads
             options.inter_op_num_threads = 1

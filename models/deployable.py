@@ -30,7 +30,7 @@ class RegressionPipeline:
     scaler_scale: np.ndarray
     model: object
     description: dict = field(default_factory=dict)
-    examples: np.ndarray | None = None  # raw test-split readings, for latency measurements
+    examples: np.ndarray | None = None  # raw test-split readings: predictions.csv, latency measurements
     normalisation: MinMaxScaling | None = None  # raw readings -> the channels it was trained on
 
     def features(self, readings) -> np.ndarray:
@@ -81,7 +81,7 @@ class TimeSeriesPipeline:
 
 def regression_pipeline(datamodule, model) -> RegressionPipeline:
     table = datamodule.table
-    channels, examples = list(datamodule.channel_names), table.channels[datamodule.test_idx][:1024].copy()
+    channels, examples = list(datamodule.channel_names), table.channels[datamodule.test_idx].copy()
     if table.normalisation is not None:  # deployed on the raw readings the channels came from
         channels, examples = list(table.normalisation.raw_channels), table.normalisation.raw(examples)
     return RegressionPipeline(channels, list(datamodule.target_names),

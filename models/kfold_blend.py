@@ -17,7 +17,7 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted, validate_data
-from tqdm.auto import tqdm
+from data.progress import progress
 
 from data.splits import kfold_indices
 from models.uncertainty import IntervalMixin
@@ -49,7 +49,7 @@ class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         folds, self.fold_warning_ = kfold_indices(len(X), self.n_folds, self.seed, groups)
         if self.fold_warning_:
             log.warning(self.fold_warning_)
-        for k, (fit_rows, held_rows) in enumerate(tqdm(folds, desc="k-fold", disable=not self.progress, leave=False)):
+        for k, (fit_rows, held_rows) in enumerate(progress(folds, desc="k-fold", unit="folds", enabled=self.progress)):
             model = clone(self.estimator)
             if "seed" in model.get_params():
                 model.set_params(seed=self.seed + k)

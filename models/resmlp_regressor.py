@@ -16,7 +16,7 @@ import torch
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
-from tqdm.auto import tqdm
+from data.progress import progress
 
 from data.errors import InputError
 from data.splits import carve_validation
@@ -101,7 +101,7 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
         generator = torch.Generator().manual_seed(self.seed)
         best_loss, best_state, waited = math.inf, None, 0
         self.history_ = []
-        bar = tqdm(range(self.max_epochs), desc="resmlp", unit="epoch", disable=not self.progress, leave=False)
+        bar = progress(range(self.max_epochs), desc="resmlp", unit="epochs", enabled=self.progress)
         for epoch in bar:
             self.module_.train()
             order = torch.randperm(len(Xt), generator=generator).to(self.device_)

@@ -15,7 +15,7 @@ import numpy as np
 import torch
 from sklearn.base import BaseEstimator, ClassifierMixin
 from torch import nn
-from tqdm.auto import tqdm
+from data.progress import progress
 
 from data.errors import InputError
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
@@ -75,8 +75,8 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         Xt, yt = torch.as_tensor(X), torch.as_tensor(y)
         self.history_ = []
         start = time.perf_counter()
-        bar = tqdm(range(self.max_epochs), desc=type(self.module_).__name__, unit="epoch",
-                   disable=not self.progress, leave=False)
+        bar = progress(range(self.max_epochs), desc=type(self.module_).__name__, unit="epochs",
+                       enabled=self.progress)
         for epoch in bar:
             self.module_.train()
             order = torch.randperm(len(Xt), generator=generator)

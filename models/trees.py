@@ -11,13 +11,14 @@ from sklearn.tree import DecisionTreeRegressor
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from data.errors import InputError
+from data.threads import configured_threads
 
 KINDS = ("random_forest", "extra_trees", "decision_tree")
 
 
 class TreeRegressor(RegressorMixin, BaseEstimator):
     def __init__(self, kind="extra_trees", n_estimators=400, max_depth=14, max_features="sqrt",
-                 min_samples_leaf=1, per_output=False, n_jobs=-1, seed=0):
+                 min_samples_leaf=1, per_output=False, n_jobs=None, seed=0):
         self.kind = kind
         self.n_estimators = n_estimators
         self.max_depth = max_depth
@@ -28,14 +29,17 @@ class TreeRegressor(RegressorMixin, BaseEstimator):
         self.seed = seed
 
     def _base(self):
+        # n_jobs None: the run's thread setting (data/threads.py), so forests do not fight
+        # whatever else runs on the machine; -1 still means every core.
+        n_jobs = self.n_jobs if self.n_jobs is not None else (configured_threads() or 1)
         common = dict(max_depth=self.max_depth, max_features=self.max_features,
                       min_samples_leaf=self.min_samples_leaf, random_state=self.seed)
         if self.kind == "decision_tree":
             return DecisionTreeRegressor(**common)
         if self.kind == "random_forest":
-            return RandomForestRegressor(n_estimators=self.n_estimators, n_jobs=self.n_jobs, **common)
+            return RandomForestRegressor(n_estimators=self.n_estimators, n_jobs=n_jobs, **common)
         if self.kind == "extra_trees":
-            return ExtraTreesRegressor(n_estimators=self.n_estimators, n_jobs=self.n_jobs, **common)
+            return ExtraTreesRegressor(n_estimators=self.n_estimators, n_jobs=n_jobs, **common)
         raise InputError(f"model.kind must be one of {', '.join(KINDS)}, got '{self.kind}'")
 
     def __sklearn_tags__(self):

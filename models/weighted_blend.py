@@ -26,6 +26,7 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from data.progress import progress
 from data.errors import InputError
 from data.splits import carve_validation
 from models.kfold_blend import KFoldBlend
@@ -118,7 +119,7 @@ class ValidationWeightedBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         y2 = y.reshape(len(y), -1)
         y_val2 = np.asarray(y_val, dtype=np.float64).reshape(len(y_val), -1)
         self.models_, self.fit_time_s_, scores, val_predictions = {}, {}, [], []
-        for name, estimator in self.candidates.items():
+        for name, estimator in progress(self.candidates.items(), desc="blend candidates", unit="models"):
             start = time.perf_counter()
             model = clone(estimator).fit(X, y, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
             self.fit_time_s_[name] = time.perf_counter() - start

@@ -6,6 +6,11 @@ import pytest
 from hydra import compose, initialize_config_dir
 from hypothesis import HealthCheck, settings
 
+from data.threads import apply_threads, resolve_threads
+
+# One thread per library, as train.py's default: tests run beside each other and other work.
+apply_threads(resolve_threads(os.environ.get("TOUCHSTONE_THREADS", "1")))
+
 # Hypothesis profiles. "ci" (the default) is derandomised with no example database, so a failure
 # reproduces exactly and prints its falsifying example; its per-test example counts add up to
 # more than 10,000 generated examples (tests/test_properties.py). "thorough" runs 20x more,

@@ -99,9 +99,9 @@ def write(tmp_path, name, text):
     ("empty.csv", "", "file is empty"),
     ("header.csv", "a,b\n", "no rows"),
     ("missing.csv", "r_01_ohm,x_mm\n1,2\n", "missing channel column"),
-    ("nan.csv", "r_01_ohm,r_02_ohm,x_mm\n1,,2\n", "'r_02_ohm' has a missing or infinite value in row 0"),
-    ("inf.csv", "r_01_ohm,r_02_ohm,x_mm\n1,2,3\n1,inf,3\n", "'r_02_ohm' has a missing or infinite value in row 1"),
-    ("text.csv", "r_01_ohm,r_02_ohm,x_mm\n1,2,3\n1,open,3\n", "non-numeric value 'open' in row 1"),
+    ("nan.csv", "r_01_ohm,r_02_ohm,x_mm\n1,,2\n", "'r_02_ohm' has a missing or infinite value in line 2"),
+    ("inf.csv", "r_01_ohm,r_02_ohm,x_mm\n1,2,3\n1,inf,3\n", "'r_02_ohm' has a missing or infinite value in line 3"),
+    ("text.csv", "r_01_ohm,r_02_ohm,x_mm\n1,2,3\n1,open,3\n", "non-numeric value 'open' in line 3"),
     ("rig.xlsx", "whatever", "unsupported file type"),
 ])
 def test_bad_tables_are_one_line_errors(tmp_path, name, text, message):

@@ -9,6 +9,8 @@ from hydra import compose, initialize_config_dir
 from hydra.utils import get_object
 from omegaconf import OmegaConf
 
+from data.config_checks import check_target_keys
+
 ROOT = Path(__file__).resolve().parents[1]
 PACKAGES = ("data", "models", "export")
 # who may not import whom: data never imports models/ or export/; models never imports export/
@@ -104,6 +106,7 @@ def test_every_config_file_composes(overrides):
     for override in overrides:  # the option asked for is the one composed
         group, option = override.lstrip("+").split("=", 1)
         assert choices[group] == option, (group, choices.get(group))
+    check_target_keys(cfg)  # every key of a node with a _target_ of ours is a parameter it takes
     # resolve what a run reads, interpolations included, and every _target_ must import
     targets = []
     for key in ("data", "model", "scene", "trainer", "logger"):

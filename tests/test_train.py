@@ -62,7 +62,7 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
 
     predictions = pd.read_csv(tmp_path / "predictions.csv")
     assert len(predictions) == saved["data"]["n_test"]
-    assert {"true_depth_mm", "pred_depth_mm", "true_pressure_pa", "pred_pressure_pa"} <= set(predictions)
+    assert {"true_depth_mm", "depth_mm", "true_pressure_pa", "pressure_pa", "r_01_ohm"} <= set(predictions)
 
     events = EventAccumulator(str(tmp_path / "tensorboard")).Reload()
     scalars = events.Tags()["scalars"]
@@ -78,7 +78,7 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
         for target in ("x_mm", "depth_mm"):
             assert sum(w[target] for w in weights.values()) == pytest.approx(1.0)
         assert set(saved["uncertainty"]["coverage_calibrated"]) == {"x_mm", "y_mm", "depth_mm", "pressure_pa"}
-        assert {"lower95_x_mm", "upper95_x_mm"} <= set(predictions)
+        assert {"x_mm_lower95", "x_mm_upper95"} <= set(predictions)
         assert set(saved["ablation"]["delta_r2_without"]) == {"raw", "log1p", "sqrt", "zscore", "stats",
                                                             "pair_products", "pair_ratios"}
         assert np.isfinite(np.asarray(saved["identifiability"]["position_sigma_mm"], dtype=float)).any()
@@ -145,7 +145,7 @@ def test_train_py_writes_under_the_run_dir_only(tmp_path):
 
 @pytest.mark.parametrize("failing_step, overrides", [
     ("export", ["export.opset=1"]),                               # no ONNX exporter supports opset 1
-    ("cost measurement", ["cost.budget_s=-1", "export=none"]),    # a negative budget is refused
+    ("cost measurement", ["cost.measure_latency=true", "cost.budget_s=-1", "export=none"]),  # a negative budget is refused
 ])
 def test_a_run_that_fails_late_leaves_nothing_that_looks_finished(tmp_path, failing_step, overrides):
     run_dir = tmp_path / "run"

@@ -22,7 +22,7 @@ from functools import lru_cache
 
 import numpy as np
 import pandas as pd
-from tqdm.auto import tqdm
+from data.progress import progress
 
 from data.physics.sheet_conduction import PatchUpdateSolver, SheetGrid, SheetSolver, pair_resistance_ohm
 from data.scenes.contract import random_generator_for, resolve_effects
@@ -162,8 +162,7 @@ class Rubber12Scene:
 
         n = len(x)
         readings, force, pressure = np.empty((n, len(pairs))), np.zeros(n), np.zeros(n)
-        bar = tqdm(total=n, desc="rubber12", unit="press", leave=False,
-                   disable=not self.progress or n < 5000)
+        bar = progress(total=n, desc="rubber12", unit="presses", enabled=self.progress)
         # Field effects and the solve go chunk by chunk so memory stays flat in n_samples.
         for start in range(0, n, chunk):
             part = slice(start, min(start + chunk, n))

@@ -12,7 +12,7 @@ import numpy as np
 from scipy.stats import spearmanr
 from sklearn.base import clone
 from sklearn.metrics import r2_score
-from tqdm.auto import tqdm
+from data.progress import progress as progress_bar
 
 from data.features import enabled_groups
 from models.uncertainty import coverage
@@ -84,7 +84,7 @@ def feature_ablation(estimator, datamodule, progress=True) -> dict:
 
     full = test_r2(groups)
     result = {"all_groups_r2": dict(zip(targets, map(float, full))), "delta_r2_without": {}}
-    for group in tqdm([g for g in groups if len(groups) > 1], desc="ablation", disable=not progress, leave=False):
+    for group in progress_bar([g for g in groups if len(groups) > 1], desc="ablation", unit="refits", enabled=progress):
         delta = test_r2([g for g in groups if g != group]) - full
         result["delta_r2_without"][group] = dict(zip(targets, map(float, delta)))
     return result

@@ -49,14 +49,18 @@ def _log_to_tensorboard(logger, result, figures) -> None:
 
 
 def _predictions_frame(result) -> pd.DataFrame:
-    targets = result.targets
-    frame = pd.DataFrame({**{f"true_{t}": result.y_test[:, k] for k, t in enumerate(targets)},
-                          **{f"pred_{t}": result.pred_test[:, k] for k, t in enumerate(targets)}})
-    if result.interval is not None:
-        _, lower, upper = result.interval
-        for k, t in enumerate(targets):
-            frame[f"lower95_{t}"], frame[f"upper95_{t}"] = lower[:, k], upper[:, k]
+    """One row per test press: the raw readings the deployed model takes (so the file is a
+    ready input for predict.py), then each target's prediction under the same column names that
+    predict.py writes (x_mm, x_mm_lower95, x_mm_upper95), then the truth (true_x_mm)."""
+    targets, pipeline = result.targets, result.pipeline
+    frame = pd.DataFrame(pipeline.examples, columns=pipeline.channel_names)
     frame.insert(0, "row", result.test_rows)
+    for k, t in enumerate(targets):
+        frame[t] = result.pred_test[:, k]
+        if result.interval is not None:
+            frame[f"{t}_lower95"], frame[f"{t}_upper95"] = result.interval[1][:, k], result.interval[2][:, k]
+    for k, t in enumerate(targets):
+        frame[f"true_{t}"] = result.y_test[:, k]
     return frame
 
 

@@ -1,0 +1,93 @@
+"""Threads benchmark: three workloads on an idle machine and beside one CPU-bound process, with
+every library's default thread count (`threads=all`, the old behaviour) and with Touchstone's
+default (`threads=1`). The slowdown is loaded / idle wall time.
+
+    .venv/bin/python bench/threads.py                      # all workloads, ~10 min on 2 cores
+    .venv/bin/python bench/threads.py --workloads prcnn_epoch --repeats 1
+
+Workloads: `default_run` = `python train.py` (the blend pipeline, export and latency included),
+`resmlp_run` = `python train.py model=resmlp`, `prcnn_epoch` = one PR-CNN training epoch on
+2,000 windows of the fingertip's shape (2 channels x 140 steps, batch 128), timed in-process
+after start-up. The competing process is a pure-Python busy loop (one core).
+"""
+import argparse
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+WORKLOADS = {
+    "default_run": [sys.executable, "train.py", "hydra.run.dir={out}"],
+    "resmlp_run": [sys.executable, "train.py", "model=resmlp", "hydra.run.dir={out}"],
+    "prcnn_epoch": [sys.executable, "bench/threads.py", "--child-prcnn-epoch"],
+}
+
+
+def prcnn_epoch() -> None:
+    """One PR-CNN epoch, configured as experiment=materials10 composes it; prints its seconds."""
+    sys.path.insert(0, str(ROOT))
+    import numpy as np
+    from hydra import compose, initialize_config_dir
+    from hydra.utils import instantiate
+
+    from data.threads import apply_threads, resolve_threads
+    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+        cfg = compose("config", overrides=["experiment=materials10", "trainer.max_epochs=1",
+                                           "trainer.progress=false", "trainer.device=cpu"])
+    apply_threads(resolve_threads(os.environ.get("TOUCHSTONE_THREADS", "1")))
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((2000, 2, 140)).astype(np.float32)
+    y = rng.integers(0, 10, 2000)
+    model = instantiate(cfg.model, modalities={"triboelectric": [0], "piezoresistive": [1]})
+    start = time.perf_counter()
+    model.fit(X, y)
+    print(f"{time.perf_counter() - start:.3f}")
+
+
+def wall_time(workload: str, threads: str, out: Path) -> float:
+    command = [part.format(out=out) for part in WORKLOADS[workload]]
+    env = dict(os.environ, TOUCHSTONE_THREADS=threads, CI="true")
+    for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
+        env.pop(name, None)  # `all` must mean every library's own default
+    start = time.perf_counter()
+    done = subprocess.run(command, cwd=ROOT, env=env, capture_output=True, text=True)
+    seconds = time.perf_counter() - start
+    if done.returncode != 0:
+        raise SystemExit(f"{workload} failed: {done.stderr.strip().splitlines()[-1:]}")
+    return float(done.stdout.strip().splitlines()[-1]) if workload == "prcnn_epoch" else seconds
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--workloads", nargs="*", default=list(WORKLOADS))
+    parser.add_argument("--repeats", type=int, default=1, help="best of this many runs per cell")
+    parser.add_argument("--child-prcnn-epoch", action="store_true", help=argparse.SUPPRESS)
+    args = parser.parse_args(argv)
+    if args.child_prcnn_epoch:
+        return prcnn_epoch()
+    out = ROOT / "outputs" / "bench_threads"
+    rows = []
+    for workload in args.workloads:
+        for threads in ("all", "1"):
+            times = {}
+            for load in ("idle", "one busy process"):
+                busy = subprocess.Popen([sys.executable, "-c", "while True: pass"]) if load != "idle" else None
+                try:
+                    times[load] = min(wall_time(workload, threads, out) for _ in range(args.repeats))
+                finally:
+                    if busy is not None:
+                        busy.kill()
+                        busy.wait()
+            rows.append((workload, threads, times["idle"], times["one busy process"]))
+            print(f"{workload:12s} threads={threads:3s} idle {times['idle']:7.1f} s   "
+                  f"beside one busy process {times['one busy process']:7.1f} s   "
+                  f"slowdown {times['one busy process'] / times['idle']:.2f}x", flush=True)
+    print(f"\n| workload | threads | idle (s) | beside one busy process (s) | slowdown |\n|---|---|---|---|---|")
+    for workload, threads, idle, loaded in rows:
+        print(f"| {workload} | {threads} | {idle:.1f} | {loaded:.1f} | {loaded / idle:.2f}x |")
+
+
+if __name__ == "__main__":
+    main()
