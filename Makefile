@@ -15,8 +15,8 @@ install: $(VENV)/.installed
 train: install                ## python train.py on the default simulated scene (make train ARGS="model=resmlp")
 	$(PY) train.py $(ARGS)
 
-test: install                 ## the default test suite (< 10 min on 2 cores)
-	$(PY) -m pytest -q -m "not slow" --durations=15
+test: install                 ## the default test suite on both cores (< 10 min on 2 cores)
+	$(PY) -m pytest -q -m "not slow" -n 2 --durations=15
 
 test-slow: install            ## the slow tests only
 	$(PY) -m pytest -q -m slow --durations=5

@@ -49,8 +49,11 @@ def main(cfg: DictConfig) -> float:
     stage = output_dir / STAGE
     shutil.rmtree(stage, ignore_errors=True)
     try:
-        launcher = HydraConfig.get().launcher
-        apply_threads(resolve_threads(cfg.threads, launcher.get("n_jobs", 1) if "joblib" in str(launcher.get("_target_", "")) else 1))
+        launcher = HydraConfig.get().launcher  # joblib runs n_jobs runs side by side: `all` is their share
+        parallel_jobs = launcher.get("n_jobs", 1) if "joblib" in str(launcher.get("_target_", "")) else 1
+        threads = resolve_threads(cfg.threads, parallel_jobs)
+        apply_threads(threads)
+        log.info("threads: %d per process (threads=%s)", threads, cfg.threads)
         with phase("start-up (imports)"):
             from export.latency import record_costs
             from export.run_export import export_run

@@ -21,9 +21,12 @@ sys.path.insert(0, str(ROOT))
 
 # full scene -> (minimal scene, the key that sets its size, samples per unit of that key).
 # A rubber12 sample is one press; a fingertip sample is one recording (one pass, two channels
-# of ~2,100 steps), and its size key counts passes per force level over 18 boards x 6 levels.
+# of ~2,100 steps), and its size key counts passes per force level over 18 boards x 6 levels;
+# a capacitive6x6 characterisation repetition is 4 cells x 10 force levels.
 SCENES = {"rubber12_lab": ("rubber12_minimal", "n_samples", 1),
-          "fingertip": ("fingertip_minimal", "passes_per_level", 18 * 6)}
+          "fingertip": ("fingertip_minimal", "passes_per_level", 18 * 6),
+          "taxels": ("taxels_minimal", "n_samples", 1),
+          "capacitive6x6": ("capacitive6x6_minimal", "n_repetitions", 40)}
 
 
 def load(name: str, n_samples: int, effects=None):
@@ -41,13 +44,18 @@ def load(name: str, n_samples: int, effects=None):
     return cfg
 
 
+def n_generated(result) -> int:
+    """Samples in what a scene generated: rows of a table, or recordings of a set."""
+    return len(result.frame) if hasattr(result, "frame") else len(result)
+
+
 def seconds(cfg, repeats: int) -> float:
     """Best wall time per generated sample over `repeats` runs."""
     best = float("inf")
     for _ in range(repeats):
         scene = instantiate(cfg)
         start = time.perf_counter()
-        count = len(scene.generate().frame) if hasattr(scene, "simulate") else len(scene.generate())
+        count = n_generated(scene.generate())
         best = min(best, (time.perf_counter() - start) / count)
     return best
 
@@ -60,8 +68,8 @@ def main(argv=None):
     args = parser.parse_args(argv)
 
     for full in args.scenes:
-        minimal, _, _ = SCENES[full]
-        n = args.n if full.startswith("rubber12") else args.n // 4
+        minimal, _, per_unit = SCENES[full]
+        n = args.n if per_unit == 1 else args.n // 4  # fingertip: a recording costs ~4 presses
         full_cfg, minimal_cfg = load(full, n), load(minimal, n)
         seconds(load(full, 10), 1)  # warm-up: solver factorisations are cached per process
         t_full, t_min = seconds(full_cfg, args.repeats), seconds(minimal_cfg, args.repeats)
@@ -88,8 +96,7 @@ def main(argv=None):
         for size in (n // 2, n, 2 * n):
             cfg = load(full, size)
             per_sample = seconds(cfg, args.repeats)
-            count = len(instantiate(cfg).generate().frame) if full.startswith("rubber12") else \
-                len(instantiate(cfg).generate())
+            count = n_generated(instantiate(cfg).generate())
             print(f"| {count} | {count * per_sample:.3f} | {1 / per_sample:,.0f} |")
 
 

@@ -36,8 +36,10 @@ class RegressionDataModule:
         table = self.source.load()
         if not isinstance(table, SensorTable):
             name = getattr(self.source, "name", type(self.source).__name__)
-            raise InputError(f"scene {name} produces time-series recordings, not one row per press; "
-                             "use data=timeseries (or experiment=materials10, textures13, combined18)")
+            kind = type(table).__name__
+            raise InputError(f"scene {name} produces a {kind}, not one row per press; for recordings use "
+                             "data=timeseries (experiment=materials10, textures13, combined18), for a contact "
+                             "stream experiment=capacitive_tracking")
         self.table = table
         self.channel_names = list(table.channel_columns)
         self.target_names = list(table.target_columns)

@@ -20,7 +20,9 @@ from onnx import TensorProto
 
 from export.graph_builder import GraphBuilder, tensor
 from export.torch_graphs import RegressionFrontEnd, ResMLPInUnits, WindowClassifier, to_onnx
+from export.sklearn_graphs import classic_to_onnx
 from export.tree_graphs import tree_to_onnx
+from models.classic_regressors import ClassicRegressor
 from models.kfold_blend import KFoldBlend
 from models.deployable import RegressionPipeline, TimeSeriesPipeline
 from models.resmlp_regressor import ResMLPRegressor
@@ -41,6 +43,8 @@ def _leaf(builder, model, features, n_features, n_targets, opset, prefix) -> str
         proto = to_onnx(ResMLPInUnits(model), torch.zeros(2, n_features), "features", "y", opset)
     elif isinstance(model, TreeRegressor):
         proto = tree_to_onnx(model, n_features, n_targets, opset)
+    elif isinstance(model, ClassicRegressor):  # seed 001's linear, SVR and GP regressors
+        proto = classic_to_onnx(model, n_features, n_targets, opset)
     else:
         raise TypeError(f"no ONNX exporter for {type(model).__name__}")
     return builder.add_model(proto, {"features": features}, prefix)["y"]

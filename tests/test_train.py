@@ -107,7 +107,7 @@ def train(*overrides, cwd):
     (["scene.n_samples=-5"], "error: scene.n_samples must be a positive integer, got -5", 2),
     (["scene.sparkle=1"], "Could not override 'scene.sparkle'", 2),
     (["+scene.effects.sparkle={}"], "error: scene rubber12: unknown effect 'sparkle'", 2),
-    (["scene=fingertip"], "error: scene fingertip produces time-series recordings", 2),
+    (["scene=fingertip"], "error: scene fingertip produces a RecordingSet, not one row per press; for recordings use data=timeseries", 2),
 ])
 def test_bad_config_values_fail_with_a_clear_message(tmp_path, overrides, message, code):
     result = train(*overrides, cwd=tmp_path)

@@ -1,0 +1,62 @@
+"""Force-from-capacitance table of a `experiment=capacitive_force` multirun: per model, mean ± sd over
+seeds of the test R^2 and RMSE of force_n and of the correlation factor (seed 001's slope: pressed
+cell's RMC change against the model's predicted force on the test presses, counts per newton).
+
+    .venv/bin/python bench/capacitive_force.py multirun/capacitive_force/<stamp>
+"""
+import argparse
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from omegaconf import OmegaConf
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from data.scenes.capacitive6x6 import correlation_factor_rmc_per_n, pressed_cell_rmc  # noqa: E402
+
+
+def run_row(run_dir: Path) -> dict:
+    cfg = OmegaConf.load(run_dir / ".hydra" / "config.yaml")
+    metrics = json.loads((run_dir / "metrics.json").read_text())
+    predictions = pd.read_csv(run_dir / "predictions.csv")
+    # predictions.csv: the test rows' channels, the predicted targets and true_<target>
+    truth = predictions.rename(columns=lambda c: c.removeprefix("true_") if c.startswith("true_") else c + "_pred"
+                               if c in ("force_n", "x_mm", "y_mm") else c)
+    scene = cfg.scene
+    rmc = pressed_cell_rmc(truth, scene.rows, scene.cols, scene.pitch_mm)
+    force = metrics["test"]["force_n"]
+    choices = OmegaConf.load(run_dir / ".hydra" / "hydra.yaml").hydra.runtime.choices
+    return {"model": choices.model, "seed": cfg.seed,
+            "r2": force["r2"], "rmse_n": force["rmse"],
+            "median_abs_n": float(np.median(np.abs(truth["force_n_pred"] - truth["force_n"]))),
+            "slope_pred": correlation_factor_rmc_per_n(rmc, truth["force_n_pred"].to_numpy()),
+            "slope_true": correlation_factor_rmc_per_n(rmc, truth["force_n"].to_numpy()),
+            "fit_s": metrics["cost"]["fit_time_s"]}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("sweep_dir")
+    args = parser.parse_args(argv)
+    runs = sorted((p.parent for p in Path(args.sweep_dir).glob("*/metrics.json")), key=lambda p: int(p.name))
+    frame = pd.DataFrame([run_row(r) for r in runs])
+    order = list(dict.fromkeys(frame["model"]))
+    summary = frame.groupby("model").agg(["mean", "std", "count"]).reindex(order)
+    print("| model | seeds | test R² (force) | test RMSE (N) | median abs. error (N) | correlation factor (counts/N) | fit (s) |")
+    print("|---|---|---|---|---|---|---|")
+    for model, row in summary.iterrows():
+        print(f"| {model} | {int(row[('r2', 'count')])} | {row[('r2', 'mean')]:.4f} ± {row[('r2', 'std')]:.4f} "
+              f"| {row[('rmse_n', 'mean')]:.4f} ± {row[('rmse_n', 'std')]:.4f} "
+              f"| {row[('median_abs_n', 'mean')]:.4f} ± {row[('median_abs_n', 'std')]:.4f} "
+              f"| {row[('slope_pred', 'mean')]:.2f} ± {row[('slope_pred', 'std')]:.2f} "
+              f"| {row[('fit_s', 'mean')]:.1f} |")
+    print(f"\nsensor's own slope (pressed cell's RMC vs the force sensor, test presses): "
+          f"{frame['slope_true'].mean():.2f} ± {frame['slope_true'].std():.2f} counts/N")
+
+
+if __name__ == "__main__":
+    main()

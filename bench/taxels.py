@@ -1,0 +1,159 @@
+"""Taxel benchmarks: strain evaluations (load-taxel pairs per second) and scene samples per second.
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/taxels.py                 # both, default sizes
+    .venv/bin/python bench/taxels.py --pairs 2000000 --samples 4000
+    .venv/bin/python bench/taxels.py --summarise multirun/taxel_inverse/<sweep>   # per-target table
+    .venv/bin/python bench/taxels.py --covers        # what bumps, ridges and hairs do (Fig. 6, 9, 10)
+
+Pairs: many loads (random positions, normal and shear forces) against the 2 x 2 array's taxels,
+through the half-space strain (data/physics/elastic_half_space.py, Boussinesq + Cerruti, full
+tensor) and the bonded-layer base traction (data/physics/bonded_layer.py, kernels cached). Scene:
+`generate()` of each taxels variant on random loads, best of --repeats, after one warm-up call
+(the bonded-layer kernels are built once per process, ~1 s). --summarise reads a taxel_inverse
+sweep's job folders and prints mean ± sd over seeds of each target's validation and test R^2 and
+test RMSE by cover and thickness (the best per target chosen on validation).
+"""
+import argparse
+import json
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from data.physics.bonded_layer import base_traction_pa, layer_kernels  # noqa: E402
+from data.physics.elastic_half_space import point_load_strain  # noqa: E402
+
+VARIANTS = ("taxels_minimal", "taxels_flat", "taxels", "taxels_bump", "taxels_ridge", "taxels_hair")
+
+
+def pairs_per_second(n_pairs: int, repeats: int) -> dict:
+    rng = np.random.default_rng(0)
+    n_loads = n_pairs // 4
+    taxels = np.array([[-0.75, -0.75], [0.75, -0.75], [-0.75, 0.75], [0.75, 0.75]]) * 1e-3
+    loads = rng.uniform(-1.5e-3, 1.5e-3, (n_loads, 1, 2))
+    force = rng.uniform(0.001, 0.01, (n_loads, 1))
+    shear = rng.uniform(-0.003, 0.003, (2, n_loads, 1))
+    dx, dy = taxels[None, :, 0] - loads[..., 0], taxels[None, :, 1] - loads[..., 1]
+    layer_kernels(0.5)
+    out = {}
+    for name, fn in (("half_space_strain", lambda: point_load_strain(dx, dy, 580e-6, force, shear[0], shear[1], 2.4e6, 0.5)),
+                     ("bonded_layer_traction", lambda: base_traction_pa(dx, dy, 580e-6, force, shear[0], shear[1], 0.5))):
+        best = min(_timed(fn) for _ in range(repeats))
+        out[name] = n_loads * 4 / best
+    return out
+
+
+def _timed(fn) -> float:
+    start = time.perf_counter()
+    fn()
+    return time.perf_counter() - start
+
+
+def scene_samples_per_second(n_samples: int, repeats: int, variants) -> dict:
+    from hydra import compose, initialize_config_dir
+    from hydra.utils import instantiate
+    out = {}
+    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+        for variant in variants:
+            cfg = compose("config", overrides=[f"scene={variant}", "seed=0", f"scene.n_samples={n_samples}",
+                                               "scene.protocol=random_loads"])
+            instantiate(cfg.scene).generate()  # warm-up: kernels, imports
+            best = min(_timed(lambda: instantiate(cfg.scene).generate()) for _ in range(repeats))
+            out[variant] = n_samples / best
+    return out
+
+
+def summarise(sweep_dir: Path) -> str:
+    """Markdown table: per target, cover and thickness, validation and test R^2 and test RMSE,
+    mean ± sd over seeds; the best configuration per target is chosen on VALIDATION R^2."""
+    import pandas as pd
+    import yaml
+    rows = []
+    for job in sorted(p for p in sweep_dir.iterdir() if (p / "metrics.json").is_file()):
+        overrides = dict(o.split("=", 1) for o in yaml.safe_load((job / ".hydra" / "overrides.yaml").read_text()))
+        metrics = json.loads((job / "metrics.json").read_text())
+        for target, row in metrics["test"].items():
+            if target != "average":
+                thickness_um = float(overrides.get("scene.cover_thickness_um", "nan"))
+                rows.append({"cover": overrides.get("scene", "taxels"), "thickness_um": thickness_um,
+                             "seed": overrides.get("seed"), "target": target, "val_r2": metrics["val"][target]["r2"],
+                             "r2": row["r2"], "rmse": row["rmse"]})
+    frame = pd.DataFrame(rows)
+    grouped = frame.groupby(["target", "cover", "thickness_um"]).agg(
+        val_mean=("val_r2", "mean"), val_sd=("val_r2", "std"), r2_mean=("r2", "mean"), r2_sd=("r2", "std"),
+        rmse_mean=("rmse", "mean"), rmse_sd=("rmse", "std"), seeds=("seed", "count")).reset_index()
+    lines = ["| target | cover | thickness (um) | val R² (mean ± sd) | test R² (mean ± sd) | test RMSE (mean ± sd) | seeds |",
+             "|---|---|---|---|---|---|---|"]
+    for r in grouped.itertuples():
+        lines.append(f"| {r.target} | {r.cover} | {r.thickness_um:.0f} | {r.val_mean:.3f} ± {r.val_sd:.3f} | "
+                     f"{r.r2_mean:.3f} ± {r.r2_sd:.3f} | {r.rmse_mean:.4g} ± {r.rmse_sd:.2g} | {r.seeds} |")
+    best = grouped.loc[grouped.groupby("target").val_mean.idxmax()]
+    lines.append("")
+    lines.append("Chosen on validation R² per target (test R² beside it): " + "; ".join(
+        f"{r.target}: {r.cover} at {r.thickness_um:.0f} um (val {r.val_mean:.3f}, test {r.r2_mean:.3f} ± {r.r2_sd:.3f})"
+        for r in best.itertuples()))
+    return "\n".join(lines)
+
+
+def cover_effects() -> str:
+    """The surface structures' signatures, measured on the scene (200 um bonded layer):
+    Fig. 9, mean |gamma_x| per unit pure shear under a 3 mm probe over the array centre, bumps vs
+    flat; Fig. 10c-d, peak |shear along the motion| of a 10 mN load with mu = 0.3 moved across a
+    ridge vs along it (flat cover: both directions); Fig. 6, peak |gamma_x| / peak |eps_z| during a
+    pass over a hair vs over the flat cover."""
+    from data.scenes.taxels import TaxelsScene
+    rng = np.random.default_rng(0)
+    x, y = rng.uniform(-0.3, 0.3, (2, 200))
+    lines = []
+    broad = {"flat (3 mm probe)": {"needle": {"diameter_um": 3000.0, "rings": 6, "points_per_ring": 16}},
+             "bumps (3 mm probe)": {"bump": {"probe_diameter_um": 3000.0}}}
+    response = {}
+    for label, effects in broad.items():
+        frame = TaxelsScene(effects={**effects, "finite_layer": {}}, cover_thickness_um=200.0).simulate(x, y, 0.0, 1.0, 0.0).frame
+        response[label] = float(np.abs(frame.gamma_x_t0).mean())
+        lines.append(f"  Fig. 9  {label:28s} mean |gamma_x| per mN of shear {response[label]:.3e}")
+    lines.append(f"  Fig. 9  bump gain over flat: {response['bumps (3 mm probe)'] / response['flat (3 mm probe)']:.2f}x")
+
+    def peak(effects, direction_deg, component):
+        frame = TaxelsScene(protocol="moving_loads", n_samples=601, effects={**effects, "finite_layer": {}},
+                            directions_deg=[direction_deg], cover_thickness_um=200.0).generate().frame
+        return float(np.abs(frame[component]).max())
+    for label, effects in (("flat", {}), ("ridge along x", {"ridge": {"orientation_deg": 0.0}})):
+        across, along = peak(effects, 90.0, "gamma_y_t0"), peak(effects, 0.0, "gamma_x_t0")
+        lines.append(f"  Fig. 10 {label:28s} peak shear, motion across (y) {across:.4f}, "
+                     f"along (x) {along:.4f}, ratio {across / along:.2f}")
+    for label, effects in (("flat", {}), ("hair", {"hair": {}})):
+        ratio = peak(effects, 0.0, "gamma_x_t0") / peak(effects, 0.0, "eps_z_t0")
+        lines.append(f"  Fig. 6  {label:28s} peak |gamma_x| / peak |eps_z| = {ratio:.2f}")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--pairs", type=int, default=1_000_000, help="load-taxel pairs per strain timing")
+    parser.add_argument("--samples", type=int, default=4000, help="scene samples per timing")
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--variants", nargs="*", default=list(VARIANTS))
+    parser.add_argument("--summarise", type=Path, default=None, help="a taxel_inverse sweep folder")
+    parser.add_argument("--covers", action="store_true", help="print the surface structures' signatures")
+    args = parser.parse_args(argv)
+    if args.covers:
+        print(cover_effects())
+        return
+    if args.summarise is not None:
+        print(summarise(args.summarise))
+        return
+    print(f"strain evaluation, {args.pairs:,} load-taxel pairs, best of {args.repeats}:")
+    for name, rate in pairs_per_second(args.pairs, args.repeats).items():
+        print(f"  {name:24s} {rate:14,.0f} pairs/s")
+    print(f"scene generate(), random_loads, {args.samples:,} samples, best of {args.repeats}:")
+    for name, rate in scene_samples_per_second(args.samples, args.repeats, args.variants).items():
+        print(f"  {name:24s} {rate:14,.0f} samples/s")
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,110 @@
+"""Force from capacitance (seed 001 sec. 3.5): the paper's linear regression, linear-kernel SVR
+and Gaussian process (models/classic_regressors.py) obey scikit-learn's contract, learn the
+capacitive scene's characterisation through the shared pipeline, and export to ONNX with their
+preprocessing, matching the eager pipeline in onnxruntime."""
+import numpy as np
+import pytest
+from sklearn.utils.estimator_checks import parametrize_with_checks
+
+from data.errors import InputError
+from data.scenes.capacitive6x6 import Capacitive6x6Scene, correlation_factor_rmc_per_n, pressed_cell_rmc
+from export.onnx_predictor import OnnxPredictor
+from export.run_export import export_run
+from models.classic_regressors import ClassicRegressor
+from models.deployable import load_pipeline
+from models.runs.run import run
+
+PAPER_MODELS = ["linear_regression", "svr", "gaussian_process"]
+
+
+@parametrize_with_checks([ClassicRegressor(kind="linear_regression"), ClassicRegressor(kind="svr")])
+def test_scikit_learn_estimator_checks(estimator, check):
+    check(estimator)
+
+
+@pytest.mark.slow   # ~15 s: each of ~50 checks optimises a GP's hyper-parameters
+@parametrize_with_checks([ClassicRegressor(kind="gaussian_process", max_train_samples=60)])
+def test_scikit_learn_estimator_checks_gaussian_process(estimator, check):
+    check(estimator)
+
+
+def test_unknown_kind_and_bad_parameters_are_one_line_errors():
+    X, y = np.random.default_rng(0).standard_normal((20, 3)), np.arange(20.0)
+    with pytest.raises(InputError, match="model.kind must be one of linear_regression, svr, gaussian_process"):
+        ClassicRegressor(kind="lasso").fit(X, y)
+    with pytest.raises(InputError, match="model.svr_c must be > 0"):
+        ClassicRegressor(kind="svr", svr_c=0.0).fit(X, y)
+    with pytest.raises(InputError, match="max_train_samples must be an integer >= 2"):
+        ClassicRegressor(kind="gaussian_process", max_train_samples=1).fit(X, y)
+
+
+def test_gaussian_process_trains_on_at_most_max_train_samples_rows():
+    rng = np.random.default_rng(1)
+    X = rng.standard_normal((300, 2))
+    model = ClassicRegressor(kind="gaussian_process", max_train_samples=50).fit(X, X[:, 0])
+    assert model.n_train_used_ == 50 and model.estimators_[0].X_train_.shape == (50, 2)
+
+
+def test_linear_models_recover_a_linear_law_in_units():
+    rng = np.random.default_rng(2)
+    X = rng.standard_normal((200, 4))
+    y = np.column_stack([0.02 * X[:, 0] + 1.5, 300.0 * X[:, 1] - 7.0])   # newtons and millimetres
+    for kind in ("linear_regression", "svr"):
+        pred = ClassicRegressor(kind=kind, svr_epsilon=0.001).fit(X, y).predict(X)
+        assert (np.abs(pred - y).max(axis=0) / y.std(axis=0)).max() < 1e-2, kind   # each target in its unit
+
+
+@pytest.fixture(scope="module")
+def force_runs(tmp_path_factory):
+    """One tiny characterisation run per paper model through the shared pipeline, exported."""
+    from hydra import compose, initialize_config_dir
+    from conftest import CONFIG_DIR
+    runs = {}
+    for model in PAPER_MODELS:
+        out = tmp_path_factory.mktemp(model)
+        with initialize_config_dir(config_dir=CONFIG_DIR, version_base="1.3"):
+            cfg = compose(config_name="config", overrides=[
+                "experiment=capacitive_force", f"model={model}", "scene.n_repetitions=12",
+                "scene.force_levels_n=[0.1,0.5,1.0,2.0,3.0]", "++model.max_train_samples=200"])
+        metrics = run(cfg, out)
+        runs[model] = (metrics, export_run(out), load_pipeline(out / "pipeline.pkl"), out)
+    return runs
+
+
+@pytest.mark.parametrize("model", PAPER_MODELS)
+def test_paper_models_learn_force_from_capacitance(force_runs, model):
+    metrics, _, pipeline, _ = force_runs[model]
+    assert metrics["test"]["force_n"]["r2"] > 0.98, metrics["test"]["force_n"]
+    assert metrics["test"]["force_n"]["rmse"] < 0.2
+    assert pipeline.feature_names == [f"raw:{c}" for c in pipeline.channel_names]   # raw RMC only, as the paper
+
+
+@pytest.mark.parametrize("model", PAPER_MODELS)
+def test_exported_graph_matches_the_eager_pipeline(force_runs, model):
+    _, path, pipeline, _ = force_runs[model]
+    predictor = OnnxPredictor(path)
+    examples = pipeline.examples
+    n = len(pipeline.channel_names)
+    hard = np.vstack([np.zeros((1, n)), np.full((1, n), -30.0), np.full((1, n), 65535.0),
+                      np.r_[150.0, np.zeros(n - 1)][None], examples])
+    # errors in units of each target's spread over the test presses; the linear models and the
+    # SVR run in float32 (a sum over many support vectors rounds at ~1e-5 of the spread), the GP
+    # in float64; the hard rows extrapolate far, so their error is relative to their own size
+    spread = pipeline.predict_raw(examples)[0].std(axis=0)
+    for batch in (1, 7, len(hard)):
+        out = predictor.predict_array(hard[:batch])["prediction"]
+        reference, _ = pipeline.predict_raw(hard[:batch])
+        assert np.isfinite(out).all()
+        scale = np.maximum(spread, 1e-4 * np.abs(reference))
+        assert (np.abs(out - reference) / scale).max() < 1e-3, model
+
+
+def test_correlation_factor_is_the_slope_in_counts_per_newton(force_runs):
+    _, _, pipeline, out = force_runs["linear_regression"]
+    table = Capacitive6x6Scene(n_repetitions=3, force_levels_n=[0.5, 1.0, 2.0, 3.0]).generate()
+    rmc = pressed_cell_rmc(table.frame, 6, 6, 6.0)
+    sensor = correlation_factor_rmc_per_n(rmc, table.frame["force_n"].to_numpy())
+    predicted = pipeline.predict_raw(table.frame[table.channel_columns].to_numpy())[0][:, 0]
+    model = correlation_factor_rmc_per_n(rmc, predicted)
+    assert 45 < sensor < 55 and abs(model - sensor) / sensor < 0.05
+    assert np.isnan(correlation_factor_rmc_per_n(rmc[:1], predicted[:1]))

@@ -1,0 +1,70 @@
+"""The capacitive_tracking study end to end, tiny: a short simulated stream (and the same frames
+as a user's CSV recording), ours beside the paper's tracker, every artefact written."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+from hydra.errors import InstantiationException
+from PIL import Image
+
+from data.contact_streams import save_frames_csv
+from data.errors import InputError
+from models.runs.capacitive_tracking import load_stream
+from models.runs.run import run
+
+TINY = ["experiment=capacitive_tracking", "scene.sessions=[hold,cross]", "scene.session_s=1.0", "scene.gap_s=0.2",
+        "scene.n_rest_frames=30", "study.force_repetitions=1", "study.animation.max_frames=4",
+        "study.animation.n_panels=2"]
+
+
+def test_simulated_stream_is_tracked_evaluated_and_animated(compose_config, tmp_path):
+    cfg = compose_config(TINY)
+    metrics = run(cfg, tmp_path)
+    names = {p.name for p in tmp_path.iterdir()}
+    assert {"metrics.json", "contacts.csv", "contacts_paper.csv", "contacts.gif", "contacts.png", "tensorboard"} <= names
+    written = json.loads((tmp_path / "metrics.json").read_text())
+    assert set(written["trackers"]) == {"ours", "paper"}
+    for name in ("ours", "paper"):
+        overall = written["trackers"][name]["overall"]
+        assert 0.0 <= overall["f1"] <= 1.0 and overall["id_switches"] >= 0
+        assert set(written["trackers"][name]["by_scenario"]) >= {"hold", "cross"}
+    assert metrics["trackers"]["ours"]["overall"]["tp"] > 0
+    assert written["trackers"]["ours"]["force_model"]["counts_per_n"] > 0
+    contacts = pd.read_csv(tmp_path / "contacts.csv")
+    assert list(contacts.columns) == ["frame", "id", "x_mm", "y_mm", "cells", "mean_load", "peak_load", "force_n"]
+    assert contacts.frame.min() >= 30 and contacts.force_n.notna().all()
+    assert not contacts.duplicated(["frame", "id"]).any()
+    with Image.open(tmp_path / "contacts.gif") as gif:
+        assert gif.n_frames == 4
+    assert any((tmp_path / "tensorboard").iterdir())
+
+
+def test_a_recording_without_truth_writes_contacts_and_animation_only(compose_config, tmp_path):
+    cfg = compose_config(TINY)
+    stream, _ = load_stream(cfg, None)
+    path = save_frames_csv(stream, tmp_path / "frames.csv")
+    out = tmp_path / "run"
+    cfg = compose_config(TINY + [f"study.recording.path={path}", "study.recording.n_rest_frames=30"])
+    metrics = run(cfg, out)
+    assert metrics["evaluation"] is None and "overall" not in metrics["trackers"]["ours"]
+    assert {"contacts.csv", "contacts.gif", "contacts.png", "metrics.json"} <= {p.name for p in out.iterdir()}
+    simulated = pd.read_csv(out / "contacts.csv")
+    assert len(simulated) > 0 and np.isnan(simulated.force_n).all()   # no scene: no force model
+
+
+@pytest.mark.parametrize("override, words", [
+    ("study.recording.rows=5", "cells per frame"),          # grid does not match the data
+    ("study.recording.n_rest_frames=5000", "rest frames"),  # fewer frames than the rest period
+])
+def test_bad_recordings_are_one_line_errors_and_write_nothing(compose_config, tmp_path, override, words):
+    cfg = compose_config(TINY)
+    stream, _ = load_stream(cfg, None)
+    path = save_frames_csv(stream, tmp_path / "frames.csv")
+    out = tmp_path / "run"
+    cfg = compose_config(TINY + [f"study.recording.path={path}", "study.recording.n_rest_frames=30", override])
+    with pytest.raises(InstantiationException) as error:  # train.py unwraps it: one line, exit 2
+        run(cfg, out)
+    cause = error.value.__cause__
+    assert isinstance(cause, InputError) and words in str(cause) and "\n" not in str(cause)
+    assert not out.exists() or not any(out.iterdir())
