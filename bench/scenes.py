@@ -26,7 +26,9 @@ sys.path.insert(0, str(ROOT))
 SCENES = {"rubber12_lab": ("rubber12_minimal", "n_samples", 1),
           "fingertip": ("fingertip_minimal", "passes_per_level", 18 * 6),
           "taxels": ("taxels_minimal", "n_samples", 1),
-          "capacitive6x6": ("capacitive6x6_minimal", "n_repetitions", 40)}
+          "capacitive6x6": ("capacitive6x6_minimal", "n_repetitions", 40),
+          "ert_boundary": ("ert_minimal", "n_samples", 1),
+          "ert_internal": ("ert_minimal", "n_samples", 1)}
 
 
 def load(name: str, n_samples: int, effects=None):

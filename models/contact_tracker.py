@@ -26,7 +26,8 @@ Two segmentations:
 - `"ours"`: the load (reading minus rest mean) of cells above threshold, scaled by the largest
   load among each cell's neighbours so a light touch beside a firm one survives, Otsu over those
   cells (the exact between-class-variance maximum over the sorted values, vectorised; skimage's
-  histogram version costs ~200 us a call on this machine), and components by steepest ascent to the
+  histogram version costs ~200 us a call on this machine), and components by steepest ascent (along
+  rows and columns; diagonal peaks joined over a high saddle) to the
   local peaks (see _segment_ours; scipy.ndimage.label costs 20-35 us a call here and joins
   contacts whose halos touch).
 
@@ -37,7 +38,8 @@ Two trackers:
   renumbers the others: an identity switch by design.
 - `"global"` (ours): one assignment over the whole Jaccard matrix (scipy's linear_sum_assignment,
   Kuhn-Munkres) with a minimum overlap; pairs with no overlap may still match within a distance
-  gate around the track's predicted centroid (fast moves); merge: the older id survives and the
+  gate around the track's predicted centroid (fast moves) or its last one (a light touch whose
+  centroid jumps between crossings, where the velocity estimate is noise); merge: the older id survives and the
   younger is remembered inside it; split: the larger child keeps the id, unless the region
   holds remembered contacts, then children and remembered contacts are matched by predicted
   position; a contact is retired only after `max_missing_frames` frames without a match, so a
@@ -61,7 +63,7 @@ THRESHOLDS = ("std", "variance")
 SEGMENTATIONS = ("ours", "paper")
 TRACKINGS = ("global", "paper")
 FORCE_FEATURES = ("peak", "sum", "mean")
-MAX, MIN = np.maximum.reduce, np.minimum.reduce
+MAX, MIN, ALL, ANY = np.maximum.reduce, np.minimum.reduce, np.logical_and.reduce, np.logical_or.reduce
 
 
 @dataclass(frozen=True)
@@ -108,12 +110,16 @@ def otsu_threshold(values: np.ndarray) -> float:
     such that `values >= t` is the upper class; with a single distinct value everything is."""
     v = np.sort(values)
     n = v.size
-    if v[0] == v[-1]:
-        return float(v[0])
+    low, high = v[[0, -1]].tolist()
+    if low == high:
+        return low
     k, k_times_rest = _split_counts(n)
     below = v[:-1].cumsum()
-    # n^2 sigma_B^2 up to a constant factor: (S(k) - k S(n)/n)^2 / (k (n - k))
-    between = (below - k * ((below[-1] + v[-1]) / n)) ** 2 / k_times_rest
+    # n^2 sigma_B^2 up to a constant factor: (S(k) - k S(n)/n)^2 / (k (n - k)); in place, fewest calls
+    between = k * ((float(below[-1]) + high) / n)
+    np.subtract(below, between, out=between)
+    between *= between
+    between /= k_times_rest
     between *= v[1:] > v[:-1]  # a split must fall between two distinct values (between >= 0; the best is > 0)
     return float(v[int(between.argmax()) + 1])
 
@@ -175,7 +181,9 @@ class ContactTracker(BaseEstimator):
       (predict on one column); force_feature: which load the force model reads ("peak": the
       largest cell, as the characterisation presses at a cell centre); follow_drift: every
       frame, move the rest mean of each cell below threshold towards its reading by drift_rate
-      (an exponential average; cells under a contact keep their mean).
+      (an exponential average; cells under a contact keep their mean); saddle_ratio: with
+      connectivity 8, two diagonal peak cells are one contact when the larger of the two cells
+      between them holds at least this fraction of the lower peak's load.
     """
 
     def __init__(self, rows=6, cols=6, pitch_mm=10.0, discard_frames=5, min_rest_frames=10, sensitivity=5.0,
@@ -283,6 +291,9 @@ class ContactTracker(BaseEstimator):
         self.no_force_.flags.writeable = False
         self.pointer_ = np.arange(self.n_cells_ + 1)
         self.rows_of_ = np.arange(self.n_cells_)
+        self.track_of_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)    # scratch: detection -> track index + 1
+        self.owner_buffer_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)
+        self.id_of_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)       # scratch: contact number -> id
         self.contact_of_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)  # scratch: contact number of each peak
         self.peak_mark_ = np.zeros(self.n_cells_ + 1, dtype=bool)       # scratch: peaks of this frame
         self.above_load_ = np.zeros(self.n_cells_ + 1)                  # scratch: load above threshold, padded
@@ -306,7 +317,9 @@ class ContactTracker(BaseEstimator):
         """Forget every track (a new recording with the same baseline)."""
         self.tracks_ = []
         self.track_cells_ = None    # the tracks' cells stacked (tracks x cells), None: to rebuild
-        self.track_ids_ = None      # the tracks' ids in the same order, rebuilt with track_cells_
+        self.track_ids_ = None      # the tracks' ids in the same order, None: to rebuild
+        self.owner_ = None          # or track index + 1 on each cell of last frame's contacts, when every track was seen
+        self.track_size_ = None     # with owner_: each track's cell count
         self.next_id_ = 1
         self.frame_index_ = -1
         self.prev_ids_ = np.zeros(0, dtype=np.int64)
@@ -371,15 +384,18 @@ class ContactTracker(BaseEstimator):
         Each above-threshold cell's load is divided by the largest load among its neighbours
         (itself included), so every contact peaks at 1 whatever its force and Otsu cuts each
         contact's core from its halo alike: a light touch beside a firm one is kept.
-        Components: every core cell steps to its largest neighbour in the core (8- or
-        4-connected) until it reaches a peak; the cells that reach one peak form one contact
-        (connected components of the steepest-ascent forest: a watershed, Vincent & Soille 1991,
-        at the resolution of the grid). Plain connected components (the paper) join two
-        contacts whose halos touch; climbing to peaks keeps them apart as long as each has a
-        peak cell of its own (with 8-connectivity, contacts whose peak cells are neighbours
-        become one: the grid's resolution). Pointer jumping
-        (each cell's target replaced by its target's target) reaches the peaks in
-        log2(path length) steps."""
+        Components: every core cell steps to its largest row or column neighbour in the core
+        until it reaches a peak; the cells that reach one peak form one contact (connected
+        components of the steepest-ascent forest: a watershed, Vincent & Soille 1991, at the
+        resolution of the grid). Plain connected components (the paper) join two contacts whose
+        halos touch; climbing to peaks keeps them apart as long as each has a peak cell of its
+        own. With 8-connectivity two peaks that are diagonal neighbours are then one contact if
+        the saddle between them is high (>= saddle_ratio of the lower peak: one touch between
+        four crossings); diagonal steps on the climb itself would let a light touch's cells run
+        up a firmer neighbour's flank (seen on the default stream: five-tap waves lost a contact
+        and switched ids). Contacts whose peak cells are row or column neighbours are one: the
+        grid's resolution. Pointer jumping (each cell's target replaced by its target's target)
+        reaches the peaks in log2(path length) steps."""
         # (ufunc reductions rather than array methods throughout: a method's wrapper costs ~1 us)
         local_peak = MAX(load[self.neighbourhood_t_[:, cells]], axis=0)
         if self.threshold == "variance":  # `>=` admits a cell exactly at its rest mean: load 0
@@ -430,9 +446,9 @@ class ContactTracker(BaseEstimator):
     def _climb(target, peak):
         """Pointer jumping: each cell's target replaced by its target's target until every cell
         points at a peak (a cell that is its own target)."""
-        while True:
-            further = target[peak]
-            if (further == peak).all():
+        while True:  # two jumps per check: paths are short (a contact spans a few cells)
+            further = target[target[peak]]
+            if ALL(further == peak):
                 return peak
             peak = further
 
@@ -468,8 +484,6 @@ class ContactTracker(BaseEstimator):
     def _describe(self, labels, n, cells, contact, peak_cell, load, above) -> FrameContacts:
         """Per-contact figures from the label of every cell (flat), the contact cells, their
         contact numbers (1..n) and each contact's peak cell."""
-        one_hot = np.zeros((n, self.n_cells_), dtype=np.float32)
-        one_hot[contact - 1, cells] = 1.0
         n_cells = np.bincount(contact, minlength=n + 1)[1:]
         mean_load = np.bincount(contact, weights=load[cells], minlength=n + 1)[1:] / n_cells
         peak = load[peak_cell]
@@ -494,13 +508,16 @@ class ContactTracker(BaseEstimator):
             xy_mm[total <= 0] = self.window_xy_mm_[peak_cell[total <= 0], 4]
         x_mm, y_mm = xy_mm[:, 0], xy_mm[:, 1]
         if self.tracking == "paper":
-            ids = paper_track_clusters(self.prev_ids_, self.prev_cells_, np.arange(1, n + 1), one_hot > 0)
-            self.prev_ids_, self.prev_cells_ = ids, one_hot > 0
+            one_hot = self._one_hot(cells, contact, n) > 0
+            ids = paper_track_clusters(self.prev_ids_, self.prev_cells_, np.arange(1, n + 1), one_hot)
+            self.prev_ids_, self.prev_cells_ = ids, one_hot
         else:
-            ids = self._associate(one_hot, n_cells.astype(np.float64), total, x_mm, y_mm, xy_mm)
+            ids = self._associate(cells, contact, n_cells.astype(np.float64), total, x_mm, y_mm, xy_mm)
         if self.hold_sensitivity is not None:
             self.near_contact_ = (labels > 0)[self.neighbourhood_].any(axis=1)
-        id_image = np.concatenate(([0], ids))[labels[:self.n_cells_]].reshape(self.rows, self.cols)
+        id_of = self.id_of_  # contact number -> id (0 -> 0: background)
+        id_of[1:n + 1] = ids
+        id_image = id_of[labels[:-1]].reshape(self.rows, self.cols)
         return FrameContacts(self.frame_index_, ids, x_mm, y_mm, n_cells, n_cells * self.pitch_mm ** 2, mean_load,
                              peak, self._force(peak, mean_load, total), id_image)
 
@@ -520,27 +537,40 @@ class ContactTracker(BaseEstimator):
 
     def _age(self, unmatched):
         """Unmatched tracks wait `max_missing_frames` frames before they are retired."""
+        self._cells_to_tracks()
         for track in unmatched:
             track.missing += 1
         if unmatched:
             kept = [t for t in self.tracks_ if t.missing <= self.max_missing_frames]
             if len(kept) != len(self.tracks_):
-                self.tracks_, self.track_cells_ = kept, None
+                self.tracks_, self.track_cells_, self.track_ids_ = kept, None, None
 
-    def _associate(self, det_cells, det_size, det_load, det_x, det_y, xy_mm) -> np.ndarray:
-        """Ids for this frame's detections (det_cells: one-hot float32, detections x cells;
-        det_load: summed load, what "larger" means when a contact splits)."""
+    def _associate(self, cells, contact, det_size, det_load, det_x, det_y, xy_mm) -> np.ndarray:
+        """Ids for this frame's detections (cells and their detection numbers 1..n; det_load:
+        summed load, what "larger" means when a contact splits)."""
         n_det = len(det_x)
         tracks = self.tracks_
+        if self.owner_ is not None and len(tracks) == n_det:
+            # the usual frame, every track seen last frame: overlaps (tracks x detections) from one
+            # count of (last frame's track, this frame's detection) pairs over this frame's cells.
+            # If each track overlaps exactly one detection and each detection one track (Jaccard
+            # >= min_jaccard, written without a division), that permutation is what the global
+            # assignment below returns (overlap matches score above 1, all others at most 1)
+            pairs = n_det + 1
+            inter = np.bincount(self.owner_[cells] * pairs + contact,
+                                minlength=pairs * pairs).reshape(pairs, pairs)[1:, 1:]
+            ok = inter * (1.0 + self.min_jaccard) >= self.min_jaccard * (self.track_size_[:, None] + det_size)
+            if np.count_nonzero(ok) == n_det and ALL(ANY(ok, axis=0)) and ALL(ANY(ok, axis=1)):
+                return self._follow_all(ok.argmax(axis=1), cells, contact, det_size, xy_mm)
+        det_cells = self._one_hot(cells, contact, n_det)
+        self._cells_to_tracks()
         if not tracks:
             self.tracks_ = [self._new_track(det_cells[d], det_x[d], det_y[d], det_size[d]) for d in range(n_det)]
             self.track_cells_ = det_cells
-            self.track_ids_ = np.array([t.id for t in self.tracks_], dtype=np.int64)
-            return self.track_ids_.copy()
+            return np.array([t.id for t in self.tracks_], dtype=np.int64)
         # overlap of every track's last cells with every detection: one small matrix product
         if self.track_cells_ is None:
             self.track_cells_ = np.stack([t.cells for t in tracks])
-            self.track_ids_ = np.array([t.id for t in tracks], dtype=np.int64)
         inter = self.track_cells_ @ det_cells.T
         if len(tracks) == n_det:
             # the usual frame: each track overlaps exactly one detection and each detection one
@@ -549,17 +579,21 @@ class ContactTracker(BaseEstimator):
             # below would return: skip the distance matrix and the solver
             ok = inter * (1.0 + self.min_jaccard) >= self.min_jaccard * (self.track_cells_.sum(axis=1)[:, None] + det_size)
             if ok.sum() == n_det and ok.any(axis=0).all() and ok.any(axis=1).all():
-                return self._follow_all(ok.argmax(axis=1), det_cells, det_size, xy_mm)
-        state = np.array([(t.size, t.x + t.vx * (t.missing + 1), t.y + t.vy * (t.missing + 1)) for t in tracks])
+                return self._follow_all(ok.argmax(axis=1), cells, contact, det_size, xy_mm)
+        state = np.array([(t.size, t.x + t.vx * (t.missing + 1), t.y + t.vy * (t.missing + 1), t.x, t.y)
+                          for t in tracks])
         jaccard = inter / (state[:, :1] + det_size - inter)
-        distance = np.hypot(state[:, 1:2] - det_x, state[:, 2:3] - det_y)
+        # the gate is around the predicted centroid or the last one, whichever is nearer: a light
+        # touch's centroid jumps between crossings and its velocity estimate is then noise
+        distance = np.minimum(np.hypot(state[:, 1:2] - det_x, state[:, 2:3] - det_y),
+                              np.hypot(state[:, 3:4] - det_x, state[:, 4:5] - det_y))
         # overlap matches score in (1, 2], gated distance-only matches in (0, 1]; 0 = not allowed
         score = np.where(jaccard >= self.min_jaccard, jaccard + 1.0,
                          np.maximum(1.0 - distance * (0.999 / self.gate_mm_), 0.0))
         rows, cols = linear_sum_assignment(score, maximize=True)
         kept = score[rows, cols] > 0
         if len(tracks) == n_det and kept.all():  # every contact found again (some by distance)
-            return self._follow_all(cols, det_cells, det_size, xy_mm)
+            return self._follow_all(cols, cells, contact, det_size, xy_mm)
         det_of = {t: d for t, d, keep in zip(rows.tolist(), cols.tolist(), kept.tolist()) if keep}
         ids = np.zeros(n_det, dtype=np.int64)
         track_of = {d: t for t, d in det_of.items()}                    # detection -> track index
@@ -629,7 +663,7 @@ class ContactTracker(BaseEstimator):
                 self._move(track, d, det_cells, det_size, det_x, det_y)
                 ids[d] = track.id
         self.tracks_ = survivors + reinstated
-        self.track_cells_ = None
+        self.track_cells_, self.track_ids_ = None, None
         self._age(unmatched)
         for d in np.flatnonzero(ids == 0).tolist():
             track = self._new_track(det_cells[d], det_x[d], det_y[d], det_size[d])
@@ -637,21 +671,43 @@ class ContactTracker(BaseEstimator):
             ids[d] = track.id
         return ids
 
-    def _follow_all(self, cols, det_cells, det_size, xy_mm) -> np.ndarray:
+    def _follow_all(self, cols, cells, contact, det_size, xy_mm) -> np.ndarray:
         """Every track found again, track t at detection cols[t]: the same update as _move,
-        in plain floats (cheaper than numpy for a handful of contacts)."""
+        in plain floats (cheaper than numpy for a handful of contacts). The tracks' cells are
+        kept as one image, owner_ (track index + 1 on each cell, 0 elsewhere), until a frame
+        needs them per track (_cells_to_tracks)."""
         tracks = self.tracks_
+        if self.track_ids_ is None:
+            self.track_ids_ = np.array([t.id for t in tracks], dtype=np.int64)
         for track, (x, y), size in zip(tracks, xy_mm[cols].tolist(), det_size[cols].tolist()):
             steps = track.missing + 1
             track.vx = 0.7 * track.vx + 0.3 * (x - track.x) / steps
             track.vy = 0.7 * track.vy + 0.3 * (y - track.y) / steps
             track.x, track.y, track.size, track.missing = x, y, size, 0
-        self.track_cells_ = det_cells[cols]
-        for track, cells in zip(tracks, self.track_cells_):
-            track.cells = cells
+        track_of = self.track_of_  # detection number -> track index + 1
+        track_of[cols + 1] = self.contact_numbers_[:len(cols), 0]
+        owner = self.owner_buffer_
+        owner.fill(0)
+        owner[cells] = track_of[contact]
+        self.owner_, self.track_size_, self.track_cells_ = owner, det_size[cols], None
         ids = np.empty(len(cols), dtype=np.int64)
         ids[cols] = self.track_ids_
         return ids
+
+    def _one_hot(self, cells, contact, n) -> np.ndarray:
+        one_hot = np.zeros((n, self.n_cells_), dtype=np.float32)
+        one_hot[contact - 1, cells] = 1.0
+        return one_hot
+
+    def _cells_to_tracks(self):
+        """Each track's cells (one-hot rows) from the owner image, before a frame that changes
+        the tracks or needs them one by one."""
+        if self.owner_ is None:
+            return
+        owner, self.owner_ = self.owner_, None
+        self.track_cells_ = (owner[:-1] == self.contact_numbers_[:len(self.tracks_)]).astype(np.float32)
+        for track, cells in zip(self.tracks_, self.track_cells_):
+            track.cells = cells
 
     @staticmethod
     def _move(track, d, det_cells, det_size, det_x, det_y):

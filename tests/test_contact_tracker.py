@@ -335,3 +335,55 @@ def test_bad_rest_frames_and_parameters_are_one_line_errors():
     with pytest.raises(InputError) as error:
         ContactTracker(rows=6, cols=6).update(np.zeros(36))
     assert "fit" in one_line(error)
+
+
+# ------------------------------------------------------------------------------ segmentation and gate details
+def _frames_from_loads(loads, n_live=3, noise=0.5, seed=3):
+    """Rest frames and n_live copies of one load image (counts above rest) with a little noise."""
+    rng = np.random.default_rng(seed)
+    loads = np.asarray(loads, dtype=float)
+    offset = 1200.0 + rng.normal(0.0, 30.0, loads.shape)
+    rest = offset + rng.normal(0.0, noise, (40,) + loads.shape)
+    live = offset + loads + rng.normal(0.0, noise, (n_live,) + loads.shape)
+    return rest, live
+
+
+def test_a_light_touch_beside_a_firm_ones_flank_keeps_its_own_contact():
+    # seed 0's default stream, frame 199 (load above rest, counts): a 1 N touch at the lower right
+    # whose cells are diagonal neighbours of a firmer touch's flank (30 at row 3, col 4); climbing
+    # diagonally joined it (and that firmer touch, with a third) into one detection
+    loads = [[26, 73, 12, 0, 0, 0],
+             [16, 46, 11, 0, 0, 0],
+             [0, 0, 0, 14, 11, 0],
+             [0, 13, 20, 48, 30, 0],
+             [0, 58, 63, 14, 23, 26],
+             [0, 24, 26, 0, 15, 25]]
+    rest, live = _frames_from_loads(loads)
+    result = run(ContactTracker(rows=6, cols=6, pitch_mm=PITCH), rest, live)[-1]
+    owner = result.labels
+    assert len(result) == 4
+    assert owner[4, 5] > 0 and owner[4, 5] not in (owner[3, 3], owner[4, 2])
+    assert owner[3, 3] != owner[4, 2]                                  # saddle 20 of 48: two touches
+
+
+def test_diagonal_peaks_are_one_contact_only_over_a_high_saddle():
+    one = np.zeros((6, 6))
+    one[2:4, 2:4] = [[40, 30], [30, 39]]                               # one touch between four crossings
+    two = np.zeros((6, 6))
+    two[2:4, 2:4] = [[40, 8], [8, 39]]                                 # two touches, a deep saddle
+    for loads, expected in ((one, 1), (two, 2)):
+        rest, live = _frames_from_loads(loads)
+        result = run(ContactTracker(rows=6, cols=6, pitch_mm=PITCH), rest, live)[-1]
+        assert len(result) == expected
+        assert len(run(ContactTracker(rows=6, cols=6, pitch_mm=PITCH, saddle_ratio=1.5), rest, live)[-1]) == 2
+        assert len(run(ContactTracker(rows=6, cols=6, pitch_mm=PITCH, connectivity=4), rest, live)[-1]) == 2
+
+
+def test_the_gate_also_holds_around_the_last_centroid():
+    # a light touch's centroid jumps 10 mm and back: the jump gives it a velocity (3 mm/frame),
+    # so the way back is 13 mm from the prediction (gate 12 mm) but 10 mm from where it was
+    path = [9.0, 9.0, 9.0, 19.0, 9.0, 9.0]
+    rest, live = stream(6, 6, [[(x, 15.0, 70.0)] for x in path])
+    results = run(ContactTracker(rows=6, cols=6, pitch_mm=PITCH), rest, live)
+    assert all(len(r) == 1 for r in results)
+    assert {int(i) for r in results for i in r.ids} == {1}

@@ -12,7 +12,7 @@ from models.report.pareto import pareto_mask, summarise
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ["scene.n_samples=120", "scene.grid_nodes=21", "scene.progress=false", "analysis.ablation=false",
-        "analysis.progress=false", "cost.budget_s=0.2"]
+        "analysis.progress=false", "cost.measure_latency=true", "cost.budget_s=0.2"]
 
 
 def test_pareto_marking_on_hand_made_points():

@@ -1,4 +1,4 @@
-"""Steady current flow in a thin conductive sheet with point-like edge electrodes.
+"""Steady current flow in a thin conductive sheet with electrodes on its edges or inside it.
 
 The sheet is a square grid of nodes (finite volumes). Each node has a sheet conductance
 (siemens per square); neighbouring nodes are joined by the series (harmonic-mean)
@@ -8,7 +8,15 @@ contacts: all nodes under one electrode share one potential.
 
 Solving the grounded system once for a unit current into each electrode gives the
 transfer-resistance matrix Z (ohms); any two-terminal reading between electrodes i and j
-is then R_ij = Z_ii + Z_jj - 2 Z_ij, so every measurement pattern costs one factorisation.
+is then R_ij = Z_ii + Z_jj - 2 Z_ij, and any four-terminal reading (current I into a, out of
+b; voltage between c and d) is V = I (Z_ca - Z_cb - Z_da + Z_db) by superposition (Holder,
+*Electrical Impedance Tomography*, 2005, ch. 1; seed 002 eq. 2), so every injection and
+measurement pattern costs one factorisation. Z is symmetric (the Laplacian is), which is the
+reciprocity theorem V_ab,cd = V_cd,ab.
+
+Electrodes: one whose centre lies on the sheet's border covers the border nodes within half its
+width (rubber12's edge electrodes); one inside the sheet covers every node within half its
+width (a point electrode, width 0, takes its nearest node).
 """
 from dataclasses import dataclass
 
@@ -16,13 +24,15 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from data.errors import InputError
+
 
 @dataclass(frozen=True)
 class SheetGrid:
     """Geometry of a square sheet: node coordinates and which nodes each electrode covers."""
     side_mm: float
     n_nodes: int                       # nodes per side
-    electrode_xy_mm: np.ndarray        # (n_electrodes, 2) electrode centres on the edges
+    electrode_xy_mm: np.ndarray        # (n_electrodes, 2) electrode centres, on the edges or inside
     electrode_width_mm: float
 
     @property
@@ -37,17 +47,34 @@ class SheetGrid:
         return np.column_stack([xx.ravel(), yy.ravel()])
 
     def electrode_nodes(self) -> list[np.ndarray]:
-        """Boundary nodes within half an electrode width of each electrode centre."""
+        """Nodes each electrode covers: border nodes within half a width of an edge electrode,
+        any nodes within half a width of an internal one; the nearest such node when the width
+        covers none (a point electrode). Electrodes outside the sheet or sharing a node are bad input."""
         xy = self.node_xy_mm
         on_edge = ((xy == 0.0) | (xy == self.side_mm)).any(axis=1)
-        half = self.electrode_width_mm / 2 + 1e-9 * self.side_mm
+        tolerance = 1e-9 * self.side_mm
+        half = self.electrode_width_mm / 2 + tolerance
+        centres = np.asarray(self.electrode_xy_mm, dtype=float).reshape(-1, 2)
+        if not np.isfinite(centres).all() or (centres < -tolerance).any() or (centres > self.side_mm + tolerance).any():
+            outside = centres[~((centres >= -tolerance) & (centres <= self.side_mm + tolerance)).all(axis=1)]
+            raise InputError(f"electrode at {np.round(outside[0], 3).tolist()} mm lies outside the "
+                             f"{self.side_mm:g} x {self.side_mm:g} mm sheet")
         nodes = []
-        for centre in self.electrode_xy_mm:
-            near = np.abs(xy - centre).max(axis=1) <= half
-            members = np.flatnonzero(on_edge & near)
+        for centre in centres:
+            centre_on_edge = bool(((np.abs(centre) <= tolerance) | (np.abs(centre - self.side_mm) <= tolerance)).any())
+            candidates = on_edge if centre_on_edge else np.ones(len(xy), dtype=bool)
+            distance = np.abs(xy - centre).max(axis=1)
+            members = np.flatnonzero(candidates & (distance <= half))
             if members.size == 0:
-                raise ValueError(f"electrode at {centre} mm covers no boundary node; widen it or refine the grid")
+                members = np.flatnonzero(candidates)[[np.argmin(distance[candidates])]]
             nodes.append(members)
+        owner = np.full(len(xy), -1)
+        for k, members in enumerate(nodes):
+            shared = members[owner[members] >= 0]
+            if shared.size:
+                raise InputError(f"electrodes {owner[shared[0]] + 1} and {k + 1} both cover the node at "
+                                 f"{xy[shared[0]].tolist()} mm; move them apart or refine the grid")
+            owner[members] = k
         return nodes
 
 
@@ -126,6 +153,33 @@ def pair_resistance_ohm(z: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     return z[..., i, i] + z[..., j, j] - 2.0 * z[..., i, j]
 
 
+def four_terminal_voltage_v(z: np.ndarray, injection_pairs: np.ndarray, measurement_pairs: np.ndarray,
+                            current_a: float = 1.0) -> np.ndarray:
+    """Voltages V_c - V_d for current `current_a` into a and out of b, from transfer matrices Z of
+    shape (..., n_electrodes, n_electrodes): V = I (Z_ca - Z_cb - Z_da + Z_db) by superposition.
+
+    Returns shape (..., n_injections, n_measurements), injection-major (seed 002 eq. 2 with
+    pairwise patterns P_j = e_a - e_b and M_i = e_c - e_d)."""
+    a, b = injection_pairs[:, 0], injection_pairs[:, 1]
+    c, d = measurement_pairs[:, 0], measurement_pairs[:, 1]
+    cc, aa = np.ix_(c, a)
+    dd, bb = np.ix_(d, b)
+    v = z[..., cc, aa] - z[..., cc, bb] - z[..., dd, aa] + z[..., dd, bb]   # (..., meas, inj)
+    return current_a * np.swapaxes(v, -1, -2)
+
+
+def four_terminal_matrix(injection_pairs: np.ndarray, measurement_pairs: np.ndarray, n_electrodes: int,
+                         current_a: float = 1.0) -> sp.csr_matrix:
+    """The same readings as a sparse linear map from Z flattened row-major (n_electrodes**2) to
+    the (n_injections * n_measurements) channels, injection-major: a Jacobian of Z maps through it."""
+    a, b = np.repeat(injection_pairs[:, 0], len(measurement_pairs)), np.repeat(injection_pairs[:, 1], len(measurement_pairs))
+    c, d = np.tile(measurement_pairs[:, 0], len(injection_pairs)), np.tile(measurement_pairs[:, 1], len(injection_pairs))
+    rows = np.repeat(np.arange(len(a)), 4)
+    cols = np.column_stack([c * n_electrodes + a, c * n_electrodes + b, d * n_electrodes + a, d * n_electrodes + b]).ravel()
+    vals = np.tile([current_a, -current_a, -current_a, current_a], len(a))
+    return sp.csr_matrix((vals, (rows, cols)), shape=(len(a), n_electrodes ** 2))
+
+
 class PatchUpdateSolver:
     """Exact transfer resistances for many presses that each change only a small patch.
 
@@ -142,12 +196,17 @@ class PatchUpdateSolver:
     nodes fall back to the full sparse solve.
     """
 
-    def __init__(self, solver: SheetSolver, base_conductance_s: float, max_patch_nodes: int = 300):
+    def __init__(self, solver: SheetSolver, base_conductance_s, max_patch_nodes: int = 300):
+        """`base_conductance_s`: one sheet conductance for every node (siemens per square), or a
+        per-node map (n_nodes**2,) for a sheet that is not uniform before any press."""
         self.solver = solver
         self.base_conductance_s = base_conductance_s
         self.max_patch_nodes = max_patch_nodes
         n_free = solver._free.size
-        g0 = solver.edge_weight * base_conductance_s
+        base_nodes = np.broadcast_to(np.asarray(base_conductance_s, dtype=float), (solver.grid.n_nodes ** 2,))
+        self._base_nodes = base_nodes
+        g0 = solver.edge_conductance_s(base_nodes)
+        self._base_edges = g0
         laplacian = (solver._incidence.T @ sp.diags(g0) @ solver._incidence).toarray()
         # One extra row/column of zeros stands for the grounded electrode (potential 0): an
         # edge into it changes only its other end's row, which the zeros reproduce exactly.
@@ -162,13 +221,18 @@ class PatchUpdateSolver:
         self._n = n_free + 1
         self._z0 = inverse[: solver.n_electrodes - 1, : solver.n_electrodes - 1].copy()
 
-    def transfer_resistance(self, node_conductance_s: np.ndarray, chunk: int = 256) -> np.ndarray:
-        """(n_presses, n_electrodes, n_electrodes) Z for (n_presses, n_nodes) conductance maps."""
+    def transfer_resistance(self, node_conductance_s: np.ndarray, chunk: int = 256,
+                            group_by_size: bool = False) -> np.ndarray:
+        """(n_presses, n_electrodes, n_electrodes) Z for (n_presses, n_nodes) conductance maps.
+
+        A chunk's presses are padded to its widest patch; `group_by_size` chunks presses of
+        similar patch size together (same results to rounding, less padding when sizes vary)."""
         g = np.atleast_2d(node_conductance_s)
         n, m = len(g), self.solver.n_electrodes
         z = np.zeros((n, m, m))
+        order = np.argsort((g != self._base_nodes).sum(axis=1), kind="stable") if group_by_size else np.arange(n)
         for start in range(0, n, chunk):
-            part = slice(start, min(start + chunk, n))
+            part = order[start:min(start + chunk, n)]
             z[part, :-1, :-1] = self._update(g[part])
         return z
 
@@ -183,7 +247,7 @@ class PatchUpdateSolver:
         if row.size == 0:
             return out
         ga, gb = g[row, s.edges[edge, 0]], g[row, s.edges[edge, 1]]
-        delta = s.edge_weight[edge] * (2.0 * ga * gb / (ga + gb) - self.base_conductance_s)
+        delta = s.edge_weight[edge] * 2.0 * ga * gb / (ga + gb) - self._base_edges[edge]
         a, b = self._ends[edge, 0], self._ends[edge, 1]
 
         touched = np.zeros((len(g), self._n), dtype=bool)
@@ -214,3 +278,27 @@ class PatchUpdateSolver:
         update = np.einsum("nvi,nvj->nij", P, np.linalg.solve(M, dL @ P))
         out[narrow] -= update[narrow]
         return out
+
+    def transfer_resistance_jacobian(self, node_to_parameter: np.ndarray) -> np.ndarray:
+        """dZ / d theta at the base map, shape (n_parameters, n_electrodes, n_electrodes), where
+        parameter k scales node conductances by (1 + theta_k * node_to_parameter[:, k]).
+
+        Adjoint (Geselowitz) sensitivity: for edge conductance g_e between nodes p and q,
+        dZ_ij/dg_e = -(u_i(p) - u_i(q)) (u_j(p) - u_j(q)), u_i the potentials for a unit current
+        into electrode i (Holder 2005, ch. 1; Polydorides & Lionheart, Meas. Sci. Technol. 13,
+        2002). The harmonic-mean edge conductance w 2 g_p g_q / (g_p + g_q) has
+        d/d g_p = w 2 g_q^2 / (g_p + g_q)^2, which the chain rule carries to theta.
+        """
+        s, m = self.solver, self.solver.n_electrodes - 1
+        potentials = self._inverse[:, :m]                        # ground row is zero
+        a, b = self._ends[:, 0], self._ends[:, 1]
+        drop = potentials[a] - potentials[b]                      # (n_edges, m)
+        gp, gq = self._base_nodes[s.edges[:, 0]], self._base_nodes[s.edges[:, 1]]
+        dg_dgp = s.edge_weight * 2.0 * gq ** 2 / (gp + gq) ** 2
+        dg_dgq = s.edge_weight * 2.0 * gp ** 2 / (gp + gq) ** 2
+        weight = np.asarray(node_to_parameter, dtype=float)
+        d_edge = (dg_dgp * gp)[:, None] * weight[s.edges[:, 0]] + (dg_dgq * gq)[:, None] * weight[s.edges[:, 1]]
+        outer = (drop[:, :, None] * drop[:, None, :]).reshape(len(drop), m * m)
+        dz = np.zeros((weight.shape[1], m + 1, m + 1))
+        dz[:, :m, :m] = -(d_edge.T @ outer).reshape(-1, m, m)
+        return dz

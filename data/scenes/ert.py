@@ -1,0 +1,392 @@
+"""Scenes `ert_boundary` and `ert_internal`: the ERT textile skin of seed 002.
+
+Sensor (seed 002 §3): a 200 x 200 mm high-resistance knitted fabric (20 kOhm/sq) with 24 point
+electrodes, under a 10 x 10 array of 20 x 20 mm low-resistance fabric patches (20 Ohm/sq) glued to
+4 mm neoprene foam. A press pushes patches into the base fabric; the contact resistance falls
+and the sheet's local conductance rises (data/scenes/ert_effects.py `contact_resistance`). The
+electrode layout is config (`electrodes_mm`, 1-based numbering = list order): ert_boundary puts
+all 24 on the edges, ert_internal 20 on the edges and 4 inside (the paper's pattern study, §4.2);
+any other layout is a list away.
+
+Readings (seed 002 §3.4, eq. 2): one current source drives `current_a` between an injection
+pair (a, b) (all N(N-1)/2 = 276 pairs, or a listed subset) and the voltage is read between
+successive electrodes (c, c+1), all from one transfer-resistance matrix per press
+(data/physics/sheet_conduction.py). Channels are the change from the unloaded frame taken
+before the first press, `dv_a01_b02_m01_v` (time-difference imaging, as ERT systems record).
+
+Protocols: `single_point` (an 18 x 18 grid = the paper's 324 points, at `n_force_levels`
+forces), `calibration` (the same presses, a different recording: its own noise), `two_point`
+(two indenters `distances_mm` apart at three `two_point_locations_mm`, `n_repeats` each),
+`random` (one contact, or two with `two_contact_probability`, anywhere; for learning), `blank`
+(`n_samples` frames with nothing pressed: the limit of quantification's blank readings).
+`recording_presses` (null = one recording) splits a protocol into recordings that each take
+their own unloaded frame, so baseline drift restarts: training data for a learned inverse then
+holds several independent drift walks, like the separate test recording it is scored on.
+Targets: x_mm, y_mm (the contact, or the mid-point of two), force_n (total); extra columns
+give the second contact, the mean pressure and the recording. One group per press, or per
+recording when `recording_presses` is set.
+"""
+from functools import lru_cache
+from itertools import combinations
+
+import numpy as np
+import pandas as pd
+from scipy.special import ndtr
+
+from data.errors import InputError
+from data.physics.sheet_conduction import (
+    PatchUpdateSolver,
+    SheetGrid,
+    SheetSolver,
+    four_terminal_matrix,
+    four_terminal_voltage_v,
+)
+from data.scenes.contract import random_generator_for, resolve_effects
+from data.scenes.ert_effects import (
+    EFFECTS,
+    PRESS_EFFECTS,
+    READING_EFFECTS,
+    SENSOR_EFFECTS,
+)
+from data.tables import SensorTable
+
+TARGETS = ["x_mm", "y_mm", "force_n"]
+PROTOCOLS = ("single_point", "calibration", "two_point", "random", "blank")
+
+
+def injection_pairs(injection, n_electrodes: int) -> np.ndarray:
+    """0-based injection pairs: `all` = every unordered pair (N(N-1)/2), `adjacent` = each
+    electrode with the next in numbering, or a list of 1-based [a, b] pairs."""
+    if injection == "all":
+        return np.array(list(combinations(range(n_electrodes), 2)), dtype=np.int64)
+    if injection == "adjacent":
+        first = np.arange(n_electrodes)
+        return np.column_stack([first, (first + 1) % n_electrodes])
+    return _explicit_pairs(injection, n_electrodes, "injection")
+
+
+def measurement_pairs(measurement, n_electrodes: int) -> np.ndarray:
+    """0-based measurement pairs: `successive` = (c, c+1) cyclically (seed 002 §4.3), or a list."""
+    if measurement == "successive":
+        first = np.arange(n_electrodes)
+        return np.column_stack([first, (first + 1) % n_electrodes])
+    return _explicit_pairs(measurement, n_electrodes, "measurement")
+
+
+def _explicit_pairs(pattern, n_electrodes, what):
+    if isinstance(pattern, str):
+        raise InputError(f"scene ert: unknown {what} pattern '{pattern}'; expected "
+                         f"{'all, adjacent' if what == 'injection' else 'successive'} or a list of [i, j] pairs")
+    try:
+        pairs = np.asarray(list(map(list, pattern)), dtype=np.int64)
+    except (TypeError, ValueError):
+        raise InputError(f"scene ert: {what} pairs must be a list of [i, j] electrode numbers, got {pattern!r}") from None
+    if pairs.ndim != 2 or pairs.shape[1] != 2 or len(pairs) == 0:
+        raise InputError(f"scene ert: {what} pairs must be a list of [i, j] electrode numbers, got {pairs.tolist()}")
+    bad = pairs[(pairs < 1).any(axis=1) | (pairs > n_electrodes).any(axis=1) | (pairs[:, 0] == pairs[:, 1])]
+    if len(bad):
+        raise InputError(f"scene ert: {what} pair {bad[0].tolist()} names a missing electrode or the same one "
+                         f"twice; electrodes are 1-{n_electrodes}")
+    return pairs - 1
+
+
+def channel_names(injections: np.ndarray, measurements: np.ndarray) -> list[str]:
+    return [f"dv_a{a + 1:02d}_b{b + 1:02d}_m{c + 1:02d}_v" for a, b in injections for c, _ in measurements]
+
+
+def patch_weights(node_xy_mm: np.ndarray, side_mm: float, patch_mm: float) -> np.ndarray:
+    """(n_nodes, n_patches) share of each node's cell under each patch: 1 inside a patch, split
+    equally between the patches that meet on a patch border (so the map is mirror symmetric)."""
+    n = int(round(side_mm / patch_mm))
+    position = node_xy_mm / patch_mm
+    tolerance = 1e-9
+    low = np.clip(np.ceil(position - 1 - tolerance).astype(int), 0, n - 1)   # patches whose closed square holds the node
+    high = np.clip(np.floor(position + tolerance).astype(int), 0, n - 1)
+    weights = np.zeros((len(node_xy_mm), n * n))
+    for ix_choice in (low[:, 0], high[:, 0]):
+        for iy_choice in (low[:, 1], high[:, 1]):
+            np.add.at(weights, (np.arange(len(node_xy_mm)), iy_choice * n + ix_choice), 0.25)
+    return weights
+
+
+def _disk_samples(radius_mm: float, n_rings: int = 4, n_angles: int = 12) -> np.ndarray:
+    """Points over a disk, each standing for an equal share of its area: equal-area rings
+    (radii at sqrt of the ring mid-areas) times angles offset by half a step, so the set is
+    mirror symmetric in x and y (a mirrored press loads mirrored patches exactly)."""
+    r = radius_mm * np.sqrt((np.arange(n_rings) + 0.5) / n_rings)
+    angle = (np.arange(n_angles) + 0.5) * 2.0 * np.pi / n_angles
+    rr, aa = np.meshgrid(r, angle, indexing="ij")
+    return np.column_stack([(rr * np.cos(aa)).ravel(), (rr * np.sin(aa)).ravel()])
+
+
+def patch_loads_n(contacts: np.ndarray, side_mm: float, patch_mm: float, radius_mm: float,
+                  spread_sd_mm: float) -> np.ndarray:
+    """(n_presses, n_patches) load on each patch from (n_presses, n_contacts, 3) contacts
+    [x_mm, y_mm, force_n]: each indenter's footprint, blurred by a Gaussian of sd
+    `spread_sd_mm` (foam_spread; 0 = none), integrated over each patch and kept on the sheet.
+    Shares below 1e-3 of a contact's load are dropped so a press changes few patches."""
+    n_side = int(round(side_mm / patch_mm))
+    edges = np.arange(n_side + 1) * patch_mm
+    samples = _disk_samples(radius_mm)
+    loads = np.zeros((len(contacts), n_side * n_side))
+    for k in range(contacts.shape[1]):
+        px = contacts[:, k, 0:1] + samples[None, :, 0]       # (n, n_samples)
+        py = contacts[:, k, 1:2] + samples[None, :, 1]
+        if spread_sd_mm > 0:
+            cx = ndtr((edges[None, None, :] - px[..., None]) / spread_sd_mm)
+            cy = ndtr((edges[None, None, :] - py[..., None]) / spread_sd_mm)
+            wx, wy = np.diff(cx, axis=-1), np.diff(cy, axis=-1)  # (n, n_samples, n_side)
+        else:
+            ix = np.clip((px / patch_mm).astype(int), 0, n_side - 1)
+            iy = np.clip((py / patch_mm).astype(int), 0, n_side - 1)
+            wx = np.eye(n_side)[ix]
+            wy = np.eye(n_side)[iy]
+        share = np.einsum("nsy,nsx->nyx", wy, wx).reshape(len(contacts), -1)
+        share /= np.maximum(share.sum(axis=1, keepdims=True), 1e-300)
+        share[share < 1e-3] = 0.0
+        share /= np.maximum(share.sum(axis=1, keepdims=True), 1e-300)
+        loads += share * contacts[:, k, 2:3]
+    return loads
+
+
+class ERTScene:
+    """Simulated presses on the ERT skin; `generate()` returns a SensorTable."""
+
+    def __init__(self, name="ert_boundary", electrodes_mm=None, protocol="single_point", seed=0, effects=None,
+                 side_mm=200.0, grid_nodes=41, patch_mm=20.0, foam_thickness_mm=4.0,
+                 sheet_resistance_ohm_per_sq=2.0e4, electrode_width_mm=0.0, current_a=1.0e-4,
+                 injection="all", measurement="successive", indenter_diameter_mm=10.0,
+                 force_range_n=(2.0, 15.0), n_force_levels=3, grid_points_per_side=18,
+                 two_point_locations_mm=((50.0, 100.0), (100.0, 30.0), (100.0, 100.0)),
+                 distances_mm=(20, 25, 30, 35, 40, 45, 50, 55, 60), two_point_force_n=8.0, n_repeats=10,
+                 n_samples=2000, position_range_mm=(10.0, 190.0), two_contact_probability=0.0,
+                 recording_presses=None):
+        self.name = name
+        self.electrodes_mm = electrodes_mm
+        self.protocol = protocol
+        self.seed = seed
+        self.effects = effects
+        self.side_mm = side_mm
+        self.grid_nodes = grid_nodes
+        self.patch_mm = patch_mm
+        self.foam_thickness_mm = foam_thickness_mm
+        self.sheet_resistance_ohm_per_sq = sheet_resistance_ohm_per_sq
+        self.electrode_width_mm = electrode_width_mm
+        self.current_a = current_a
+        self.injection = injection
+        self.measurement = measurement
+        self.indenter_diameter_mm = indenter_diameter_mm
+        self.force_range_n = force_range_n
+        self.n_force_levels = n_force_levels
+        self.grid_points_per_side = grid_points_per_side
+        self.two_point_locations_mm = two_point_locations_mm
+        self.distances_mm = distances_mm
+        self.two_point_force_n = two_point_force_n
+        self.n_repeats = n_repeats
+        self.n_samples = n_samples
+        self.position_range_mm = position_range_mm
+        self.two_contact_probability = two_contact_probability
+        self.recording_presses = recording_presses
+
+    # -- geometry ---------------------------------------------------------------------------------
+    def _check(self):
+        if self.protocol not in PROTOCOLS:
+            raise InputError(f"scene.protocol must be one of {', '.join(PROTOCOLS)}, got '{self.protocol}'")
+        if not self.side_mm > 0 or self.sheet_resistance_ohm_per_sq <= 0 or not self.current_a > 0:
+            raise InputError(f"scene ert: side_mm, sheet_resistance_ohm_per_sq and current_a must be > 0, got "
+                             f"{self.side_mm}, {self.sheet_resistance_ohm_per_sq}, {self.current_a}")
+        n_patch = self.side_mm / self.patch_mm
+        if self.patch_mm <= 0 or abs(n_patch - round(n_patch)) > 1e-9:
+            raise InputError(f"scene ert: patch_mm must divide side_mm, got {self.patch_mm} and {self.side_mm}")
+        if self.grid_nodes < 5:
+            raise InputError(f"scene ert: grid_nodes must be >= 5, got {self.grid_nodes}")
+        low, high = self.force_range_n
+        if not 0.0 <= low <= high or self.indenter_diameter_mm <= 0 or self.foam_thickness_mm < 0:
+            raise InputError(f"scene ert: need 0 <= force_range_n low <= high, indenter_diameter_mm > 0, "
+                             f"foam_thickness_mm >= 0; got {list(self.force_range_n)}, "
+                             f"{self.indenter_diameter_mm}, {self.foam_thickness_mm}")
+        if self.recording_presses is not None and int(self.recording_presses) < 1:
+            raise InputError(f"scene ert: recording_presses must be >= 1 or null, got {self.recording_presses}")
+        if self.electrodes_mm is None or np.asarray(self.electrodes_mm).ndim != 2 or np.asarray(self.electrodes_mm).shape[1] != 2:
+            raise InputError("scene ert: electrodes_mm must be a list of [x, y] electrode positions in mm")
+
+    @property
+    def n_electrodes(self) -> int:
+        return len(self.electrodes_mm)
+
+    def patterns(self) -> tuple[np.ndarray, np.ndarray]:
+        """(injection pairs, measurement pairs), 0-based."""
+        return injection_pairs(self.injection, self.n_electrodes), measurement_pairs(self.measurement, self.n_electrodes)
+
+    def channel_names(self) -> list[str]:
+        return channel_names(*self.patterns())
+
+    def sensor(self) -> dict:
+        """The simulated sensor: nominal geometry through the listed sensor effects."""
+        n_side = int(round(self.side_mm / self.patch_mm))
+        state = {"electrodes_mm": np.asarray(self.electrodes_mm, dtype=float), "side_mm": float(self.side_mm),
+                 "n_patches": n_side * n_side, "patch_base_resistance_scale": np.ones(n_side * n_side),
+                 "patch_sensitivity_scale": np.ones(n_side * n_side)}
+        for name, fn, params in resolve_effects(self.name, self.effects, EFFECTS):
+            if name in SENSOR_EFFECTS:
+                fn(state, random_generator_for(self.seed, name), **params)
+        return state
+
+    def _solver(self, sensor) -> PatchUpdateSolver:
+        return sheet_solver(float(self.side_mm), int(self.grid_nodes), float(self.electrode_width_mm),
+                            tuple(map(tuple, np.round(sensor["electrodes_mm"], 9))), float(self.patch_mm),
+                            float(self.sheet_resistance_ohm_per_sq),
+                            tuple(np.round(sensor["patch_base_resistance_scale"], 12)))
+
+    # -- protocols --------------------------------------------------------------------------------
+    def grid_points_mm(self, per_side=None) -> np.ndarray:
+        """Centres of an n x n grid of cells over the sheet (18 x 18 = the paper's 324 points)."""
+        n = per_side or self.grid_points_per_side
+        axis = (np.arange(n) + 0.5) * self.side_mm / n
+        return np.array([(x, y) for y in axis for x in axis])
+
+    def _contacts(self):
+        """(n_presses, n_contacts, 3) [x_mm, y_mm, force_n] and extra per-press columns."""
+        low, high = self.force_range_n
+        if self.protocol in ("single_point", "calibration"):
+            points = self.grid_points_mm()
+            forces = np.linspace(low, high, self.n_force_levels)
+            xy = np.repeat(points, len(forces), axis=0)
+            force = np.tile(forces, len(points))
+            return np.column_stack([xy, force])[:, None, :], {}
+        if self.protocol == "two_point":
+            rows, extra = [], {"location": [], "distance_mm": []}
+            for k, centre in enumerate(np.asarray(self.two_point_locations_mm, dtype=float)):
+                for distance in self.distances_mm:
+                    for _ in range(self.n_repeats):
+                        half = distance / 2.0
+                        rows.append([[centre[0] - half, centre[1], self.two_point_force_n],
+                                     [centre[0] + half, centre[1], self.two_point_force_n]])
+                        extra["location"].append(k + 1)
+                        extra["distance_mm"].append(float(distance))
+            contacts = np.array(rows)
+            if (contacts[..., :2] < 0).any() or (contacts[..., :2] > self.side_mm).any():
+                raise InputError("scene ert: a two_point indenter falls off the sheet; move the location or "
+                                 "shorten the distances")
+            return contacts, {k: np.asarray(v) for k, v in extra.items()}
+        if self.protocol == "blank":
+            return np.column_stack([np.full((self.n_samples, 2), self.side_mm / 2), np.zeros(self.n_samples)])[:, None, :], {}
+        rng = random_generator_for(self.seed, "protocol")
+        lo, hi = self.position_range_mm
+        n = self.n_samples
+        contacts = np.zeros((n, 2, 3))
+        contacts[:, :, :2] = rng.uniform(lo, hi, size=(n, 2, 2))
+        contacts[:, :, 2] = rng.uniform(low, high, size=(n, 2))
+        contacts[rng.random(n) >= self.two_contact_probability, 1, 2] = 0.0
+        return contacts, {}
+
+    def generate(self) -> SensorTable:
+        """Run the protocol through the listed effects."""
+        self._check()
+        contacts, extra = self._contacts()
+        return self.simulate(contacts, extra)
+
+    def load(self) -> SensorTable:
+        return self.generate()
+
+    # -- simulation -------------------------------------------------------------------------------
+    def transfer_resistance(self, contacts: np.ndarray, sensor=None) -> np.ndarray:
+        """(n_presses, n_electrodes, n_electrodes) transfer resistances for (n, n_contacts, 3)
+        contacts through the listed press effects (no reading effects)."""
+        effects = resolve_effects(self.name, self.effects, EFFECTS)
+        sensor = self.sensor() if sensor is None else sensor
+        solver = self._solver(sensor)
+        n_side = int(round(self.side_mm / self.patch_mm))
+        node_patch = patch_weights(solver.solver.grid.node_xy_mm, self.side_mm, self.patch_mm)
+        base_nodes = solver._base_nodes
+        press = {"geometry": {"foam_thickness_mm": self.foam_thickness_mm}, "spread_sd_mm": 0.0,
+                 "patch_sensitivity_scale": sensor["patch_sensitivity_scale"]}
+        for name, fn, params in effects:
+            if name == "foam_spread":
+                fn(press, **params)
+        press["patch_force_n"] = patch_loads_n(contacts, self.side_mm, self.patch_mm,
+                                               self.indenter_diameter_mm / 2.0, press["spread_sd_mm"])
+        press["patch_conductance_factor"] = np.ones((len(contacts), n_side * n_side))
+        for name, fn, params in effects:
+            if name in PRESS_EFFECTS and name != "foam_spread":
+                if name in ("hysteresis",):
+                    fn(press, random_generator_for(self.seed, f"{self.protocol}/{name}"), **params)
+                else:
+                    fn(press, **params)
+        node_conductance = base_nodes[None, :] * (press["patch_conductance_factor"] @ node_patch.T)
+        return solver.transfer_resistance(node_conductance, chunk=128, group_by_size=True)
+
+    def patch_jacobian(self, sensor) -> np.ndarray:
+        """(n_channels, n_patches) d voltage / d (relative patch conductance) of the sensor unloaded."""
+        solver = self._solver(sensor)
+        dz = solver.transfer_resistance_jacobian(patch_weights(solver.solver.grid.node_xy_mm, self.side_mm, self.patch_mm))
+        injections, measurements = self.patterns()
+        to_channels = four_terminal_matrix(injections, measurements, self.n_electrodes, self.current_a)
+        return np.asarray(to_channels @ dz.reshape(len(dz), -1).T)
+
+    def simulate(self, contacts: np.ndarray, extra=None) -> SensorTable:
+        """Readings for arbitrary presses: (n, n_contacts, 3) [x_mm, y_mm, force_n]."""
+        self._check()
+        contacts = np.asarray(contacts, dtype=float)
+        if contacts.ndim == 2:
+            contacts = contacts[:, None, :]
+        effects = resolve_effects(self.name, self.effects, EFFECTS)
+        injections, measurements = self.patterns()
+        sensor = self.sensor()
+        z = self.transfer_resistance(contacts, sensor)
+        z0 = self.transfer_resistance(np.zeros((1, 1, 3)), sensor)
+        n = len(contacts)
+        # Recordings: the unloaded frame is re-taken every `recording_presses` presses (null = one
+        # recording), so baseline noise and drift restart; each recording is one group.
+        recording = np.arange(n) // int(self.recording_presses) if self.recording_presses else np.zeros(n, dtype=int)
+        n_recordings = int(recording.max()) + 1 if n else 1
+        baseline = four_terminal_voltage_v(z0, injections, measurements, self.current_a).reshape(1, -1)
+        reading = {"voltage_v": four_terminal_voltage_v(z, injections, measurements, self.current_a).reshape(n, -1),
+                   "baseline_v": np.repeat(baseline, n_recordings, axis=0), "recording": recording,
+                   "patch_jacobian": lambda: self.patch_jacobian(sensor)}
+        for name, fn, params in effects:
+            if name in READING_EFFECTS:
+                fn(reading, random_generator_for(self.seed, f"{self.protocol}/{name}"), **params)
+
+        channels = channel_names(injections, measurements)
+        frame = pd.DataFrame(reading["voltage_v"] - reading["baseline_v"][recording], columns=channels)
+        force = contacts[:, :, 2]
+        total = force.sum(axis=1)
+        active = force > 0
+        n_active = np.maximum(active.sum(axis=1), 1)
+        centre = (contacts[:, :, :2] * active[..., None]).sum(axis=1) / n_active[:, None]
+        centre[~active.any(axis=1)] = contacts[~active.any(axis=1), 0, :2]
+        targets = pd.DataFrame({"x_mm": centre[:, 0], "y_mm": centre[:, 1], "force_n": total})
+        area_mm2 = np.pi * (self.indenter_diameter_mm / 2.0) ** 2
+        more = {"pressure_kpa": contacts[:, 0, 2] / area_mm2 * 1e3, "recording": recording}
+        if contacts.shape[1] > 1:
+            more.update({"x1_mm": contacts[:, 0, 0], "y1_mm": contacts[:, 0, 1],
+                         "x2_mm": contacts[:, 1, 0], "y2_mm": contacts[:, 1, 1], "force2_n": contacts[:, 1, 2]})
+        more.update(extra or {})
+        frame = pd.concat([frame, targets, pd.DataFrame(more)], axis=1)
+        description = {"source": "scene", "scene": self.name, "protocol": self.protocol,
+                       "effects": [name for name, _, _ in effects], "n_samples": n,
+                       "n_injections": len(injections), "n_measurements": len(measurements)}
+        groups = recording if self.recording_presses else np.arange(n)   # whole recordings held out together
+        return SensorTable(frame, channels, list(TARGETS), groups, description)
+
+    def geometry(self) -> dict:
+        """The nominal geometry a reconstruction is built from (what the designer drew, not what
+        the sensor effects made of it)."""
+        return {"side_mm": float(self.side_mm), "grid_nodes": int(self.grid_nodes),
+                "electrode_width_mm": float(self.electrode_width_mm),
+                "electrodes_mm": np.asarray(self.electrodes_mm, dtype=float).tolist(),
+                "sheet_resistance_ohm_per_sq": float(self.sheet_resistance_ohm_per_sq),
+                "current_a": float(self.current_a), "injection": self.injection, "measurement": self.measurement,
+                "indenter_diameter_mm": float(self.indenter_diameter_mm)}
+
+
+@lru_cache(maxsize=6)
+def sheet_solver(side_mm, grid_nodes, electrode_width_mm, electrodes_mm, patch_mm, sheet_resistance_ohm_per_sq,
+                 patch_base_resistance_scale) -> PatchUpdateSolver:
+    """The patch-update solver for one sensor (geometry and base map), built once per process."""
+    grid = SheetGrid(side_mm, grid_nodes, np.asarray(electrodes_mm, dtype=float), electrode_width_mm)
+    solver = SheetSolver(grid)
+    share = patch_weights(grid.node_xy_mm, side_mm, patch_mm)
+    base = 1.0 / (sheet_resistance_ohm_per_sq * (share @ np.asarray(patch_base_resistance_scale)))
+    return PatchUpdateSolver(solver, base, max_patch_nodes=700)

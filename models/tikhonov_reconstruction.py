@@ -1,0 +1,223 @@
+"""Tikhonov reconstruction and calibration of an ERT skin (seed 002 §2 eq. 3-4 and §4.3, fig. 10).
+
+Three mapping stages, all linear up to the last step, so a frame costs one matrix product:
+1. voltages -> conductance image: dsigma = Q dE with Q = (J^T J + alpha^2 Gamma^T Gamma)^-1 J^T
+   (eq. 4), J the Jacobian of the readings with respect to each pixel's relative conductance at
+   the unloaded sheet (adjoint sensitivity, data/physics/sheet_conduction.py), Gamma the identity
+   or the pixel grid's Laplacian;
+2. a Gaussian deconvolution: the blur of a point press is modelled as a Gaussian point-spread
+   function of sd `deconvolution_sigma_mm` (seed 002 assumes identical Gaussian kernels), and
+   undone with a Wiener filter (Gonzalez & Woods, *Digital Image Processing*, §5.8) truncated to
+   a small convolution kernel;
+3. a coefficient field W turns the image into per-pixel force: force = sum_p W_p D_p over the
+   calibration presses, fitted by least squares with a smoothness penalty on W (the paper's
+   supplement is not given; this is our reading of "a coefficient field from single-point
+   indentations").
+The pressure field is W * D per pixel area, upsampled bilinearly to `field_pixels` squared (the
+paper's 100 x 100); the position is the field's peak and the force its sum.
+
+alpha is chosen on a validation split of the calibration presses (mean localisation error,
+ties broken by force error): neither GCV nor the L-curve sees the calibration, which is what
+the reconstruction is judged on. The grid `alpha_relative` is relative: alpha^2 = a x
+mean diag(J^T J) / mean diag(Gamma^T Gamma).
+"""
+import numpy as np
+import scipy.sparse as sp
+from scipy.ndimage import correlate
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted
+
+from data.errors import InputError
+from data.physics.sheet_conduction import (
+    PatchUpdateSolver,
+    SheetGrid,
+    SheetSolver,
+    four_terminal_matrix,
+)
+from data.scenes.ert import injection_pairs, measurement_pairs
+
+
+def pixel_laplacian(n: int) -> np.ndarray:
+    """5-point Laplacian on an n x n pixel grid with no-flux edges (rows sum to zero)."""
+    second = sp.diags([1.0, -2.0, 1.0], [-1, 0, 1], shape=(n, n)).tolil()
+    second[0, 0] = second[-1, -1] = -1.0
+    second = second.tocsr()
+    eye = sp.identity(n)
+    return (sp.kron(eye, second) + sp.kron(second, eye)).toarray()
+
+
+def bilinear_matrix(n_out: int, n_in: int) -> np.ndarray:
+    """(n_out, n_in) linear interpolation between pixel centres (edge pixels held flat)."""
+    centres_out = (np.arange(n_out) + 0.5) * n_in / n_out - 0.5
+    position = np.clip(centres_out, 0.0, n_in - 1.0)
+    low = np.floor(position).astype(int)
+    high = np.minimum(low + 1, n_in - 1)
+    frac = position - low
+    matrix = np.zeros((n_out, n_in))
+    matrix[np.arange(n_out), low] += 1.0 - frac
+    matrix[np.arange(n_out), high] += frac
+    return matrix
+
+
+def wiener_kernel(sigma_px: float, noise_to_signal: float, half_width: int, n: int) -> np.ndarray:
+    """A (2k+1)^2 spatial kernel undoing a Gaussian blur of sd sigma_px pixels: the Wiener filter
+    H* / (|H|^2 + nsr) on a 4n grid, brought back to space and truncated."""
+    size = 4 * n
+    f = np.fft.fftfreq(size)
+    fx, fy = np.meshgrid(f, f, indexing="ij")
+    transfer = np.exp(-2.0 * (np.pi * sigma_px) ** 2 * (fx ** 2 + fy ** 2))
+    inverse = np.real(np.fft.ifft2(transfer / (transfer ** 2 + noise_to_signal)))
+    kernel = np.fft.fftshift(inverse)
+    centre = size // 2
+    kernel = kernel[centre - half_width: centre + half_width + 1, centre - half_width: centre + half_width + 1]
+    return kernel / kernel.sum()      # keeps a flat image's level (and so the force scale)
+
+
+class TikhonovReconstruction(RegressorMixin, BaseEstimator):
+    """ERT voltages (changes from the unloaded frame) -> (x_mm, y_mm, force_n).
+
+    `geometry` is the scene's nominal geometry (data.scenes.ert.ERTScene.geometry()): the
+    reconstruction knows the drawn sensor, not the one the sensor effects made of it.
+    """
+
+    def __init__(self, geometry=None, pixels_per_side=20, regulariser="laplacian",
+                 alpha_relative=(1e-4, 1e-3, 1e-2, 1e-1, 1.0), deconvolution_sigma_mm=10.0,
+                 deconvolution_noise=0.05, deconvolution_half_width=3, weight_smoothing=1.0,
+                 quantification_limit_n=2.0, validation_fraction=0.25, field_pixels=100, seed=0):
+        self.geometry = geometry
+        self.pixels_per_side = pixels_per_side
+        self.regulariser = regulariser
+        self.alpha_relative = alpha_relative
+        self.deconvolution_sigma_mm = deconvolution_sigma_mm
+        self.deconvolution_noise = deconvolution_noise
+        self.deconvolution_half_width = deconvolution_half_width
+        self.weight_smoothing = weight_smoothing
+        self.quantification_limit_n = quantification_limit_n
+        self.validation_fraction = validation_fraction
+        self.field_pixels = field_pixels
+        self.seed = seed
+
+    # -- stage 0: the forward model ---------------------------------------------------------------
+    def jacobian(self) -> np.ndarray:
+        """(n_channels, n_pixels) d voltage / d (relative pixel conductance) at the unloaded sheet."""
+        g = self.geometry
+        electrodes = np.asarray(g["electrodes_mm"], dtype=float)
+        grid = SheetGrid(g["side_mm"], g["grid_nodes"], electrodes, g.get("electrode_width_mm", 0.0))
+        solver = PatchUpdateSolver(SheetSolver(grid), 1.0 / g["sheet_resistance_ohm_per_sq"])
+        n = self.pixels_per_side
+        column = np.clip((grid.node_xy_mm / (g["side_mm"] / n)).astype(int), 0, n - 1)
+        node_pixel = column[:, 1] * n + column[:, 0]
+        dz = solver.transfer_resistance_jacobian(np.eye(n * n)[node_pixel])
+        inj = injection_pairs(g["injection"], len(electrodes))
+        meas = measurement_pairs(g["measurement"], len(electrodes))
+        to_channels = four_terminal_matrix(inj, meas, len(electrodes), g["current_a"])
+        return np.asarray(to_channels @ dz.reshape(len(dz), -1).T)
+
+    def _check_params(self):
+        if self.geometry is None:
+            raise InputError("model.geometry is required: the scene's nominal geometry (ERTScene.geometry())")
+        alphas = np.atleast_1d(np.asarray(self.alpha_relative, dtype=float))
+        if alphas.size == 0 or not np.all(np.isfinite(alphas)) or (alphas <= 0).any():
+            raise InputError(f"model.alpha_relative must be positive, got {np.asarray(self.alpha_relative).tolist()}")
+        if self.regulariser not in ("identity", "laplacian"):
+            raise InputError(f"model.regulariser must be identity or laplacian, got '{self.regulariser}'")
+        if self.pixels_per_side < 2 or self.deconvolution_sigma_mm < 0:
+            raise InputError(f"model.pixels_per_side must be >= 2 and deconvolution_sigma_mm >= 0, got "
+                             f"{self.pixels_per_side} and {self.deconvolution_sigma_mm}")
+        return alphas
+
+    def _check_X(self, X, n_channels):
+        X = np.asarray(X, dtype=float)
+        if X.ndim != 2 or X.shape[1] != n_channels:
+            raise InputError(f"voltages must have shape (n_frames, {n_channels}), got {X.shape}")
+        if not np.isfinite(X).all():
+            raise InputError("voltages contain NaN or infinite values")
+        return X
+
+    # -- fit ---------------------------------------------------------------------------------------
+    def fit(self, X, y):
+        """X: (n_presses, n_channels) calibration voltages; y: (n_presses, 3) x_mm, y_mm, force_n."""
+        alphas = self._check_params()
+        J = self.jacobian()
+        X = self._check_X(X, J.shape[0])
+        y = np.asarray(y, dtype=float)
+        if y.ndim != 2 or y.shape[1] != 3 or len(y) != len(X):
+            raise InputError(f"calibration targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
+        usable = y[:, 2] >= self.quantification_limit_n
+        if usable.sum() < 4:
+            raise InputError(f"the calibration set has {int(usable.sum())} presses at or above the quantification "
+                             f"limit ({self.quantification_limit_n} N); at least 4 are needed")
+        X, y = X[usable], y[:, :3][usable]
+        n = self.pixels_per_side
+        gamma = np.eye(n * n) if self.regulariser == "identity" else pixel_laplacian(n)
+        jtj, gtg = J.T @ J, gamma.T @ gamma
+        scale = np.trace(jtj) / max(np.trace(gtg), 1e-300)
+        pixel_mm = self.geometry["side_mm"] / n
+        self.kernel_ = (wiener_kernel(self.deconvolution_sigma_mm / pixel_mm, self.deconvolution_noise,
+                                      self.deconvolution_half_width, n)
+                        if self.deconvolution_sigma_mm > 0 else np.ones((1, 1)))
+        self.upsample_ = bilinear_matrix(self.field_pixels, n)
+
+        rng = np.random.default_rng(self.seed)
+        order = rng.permutation(len(X))
+        n_val = int(round(self.validation_fraction * len(X)))
+        val, fit = order[:n_val], order[n_val:]
+        if n_val == 0:
+            val = fit
+        scores = []
+        for a in alphas:
+            Q = np.linalg.solve(jtj + a * scale * gtg, J.T)
+            images = self._deconvolve(X @ Q.T)
+            W = self._coefficient_field(images[fit], y[fit, 2])
+            xy, force = self._locate(images[val] * W)
+            error = np.hypot(*(xy - y[val, :2]).T).mean()
+            scores.append((error, np.abs(force - y[val, 2]).mean()))
+        best = min(range(len(alphas)), key=lambda k: scores[k])
+        self.alpha_relative_ = float(alphas[best])
+        self.validation_scores_ = np.array(scores)
+        self.inverse_ = np.linalg.solve(jtj + alphas[best] * scale * gtg, J.T)    # (n_pixels, n_channels)
+        self.coefficient_field_ = self._coefficient_field(self._deconvolve(X @ self.inverse_.T), y[:, 2])
+        self.n_features_in_ = J.shape[0]
+        return self
+
+    def _deconvolve(self, images_flat):
+        n = self.pixels_per_side
+        images = images_flat.reshape(-1, n, n)
+        return np.stack([correlate(im, self.kernel_, mode="constant") for im in images]).reshape(len(images), -1)
+
+    def _coefficient_field(self, images, force):
+        """W minimising ||images W - force||^2 + lambda ||L W||^2 (L the pixel Laplacian), with
+        lambda = weight_smoothing x trace(A^T A) / trace(L^T L), plus a tiny ridge."""
+        laplacian = pixel_laplacian(self.pixels_per_side)
+        ata = images.T @ images
+        lam = self.weight_smoothing * np.trace(ata) / np.trace(laplacian.T @ laplacian)
+        ridge = 1e-9 * np.trace(ata) / len(ata) + 1e-300
+        return np.linalg.solve(ata + lam * laplacian.T @ laplacian + ridge * np.eye(len(ata)), images.T @ force)
+
+    def _locate(self, force_pixels):
+        """Peak of the upsampled field (x, y in mm) and the total force."""
+        n, m = self.pixels_per_side, self.field_pixels
+        field = self.upsample_ @ force_pixels.reshape(-1, n, n) @ self.upsample_.T
+        index = field.reshape(len(field), -1).argmax(axis=1)
+        step = self.geometry["side_mm"] / m
+        xy = np.column_stack([(index % m + 0.5) * step, (index // m + 0.5) * step])
+        return xy, force_pixels.sum(axis=1)
+
+    # -- predict -----------------------------------------------------------------------------------
+    def force_pixels(self, X) -> np.ndarray:
+        """(n_frames, n_pixels) force carried by each reconstruction pixel, in newtons."""
+        check_is_fitted(self, "inverse_")
+        X = self._check_X(X, self.n_features_in_)
+        return self._deconvolve(X @ self.inverse_.T) * self.coefficient_field_
+
+    def predict(self, X) -> np.ndarray:
+        """(n_frames, 3): x_mm, y_mm of the pressure field's peak and force_n, its integral."""
+        xy, force = self._locate(self.force_pixels(X))
+        return np.column_stack([xy, force])
+
+    def pressure_field_kpa(self, X) -> np.ndarray:
+        """(n_frames, field_pixels, field_pixels) pressure in kPa, rows in y, columns in x."""
+        n = self.pixels_per_side
+        pixel_area_mm2 = (self.geometry["side_mm"] / n) ** 2
+        pressure = self.force_pixels(X).reshape(-1, n, n) / pixel_area_mm2 * 1e3   # N/mm^2 = MPa -> kPa
+        return self.upsample_ @ pressure @ self.upsample_.T

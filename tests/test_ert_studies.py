@@ -1,0 +1,52 @@
+"""The ERT study runs end to end on tiny settings: they write their artefacts and metrics."""
+import json
+
+import pytest
+
+from models.runs.run import run
+
+TINY = ["study.seeds=[0,1]", "study.calibration.grid_points_per_side=4", "scene.grid_points_per_side=4",
+        "scene.grid_nodes=21", "study.reconstruction.pixels_per_side=8", "scene.injection=adjacent"]
+
+
+@pytest.mark.parametrize("experiment, files", [
+    ("ert_localisation", ["localisation_map.png", "localisation.csv"]),
+    ("ert_force", ["force.png", "force.csv"]),
+])
+def test_single_point_studies_write_their_tables(compose_config, tmp_path, experiment, files):
+    cfg = compose_config([f"experiment={experiment}", "scene=ert_boundary", *TINY, "study.n_blank=10"])
+    metrics = run(cfg, tmp_path)
+    for name in files + ["ert_metrics.json"]:
+        assert (tmp_path / name).exists(), name
+    assert json.loads((tmp_path / "ert_metrics.json").read_text())["scene"] == "ert_boundary"
+    assert "val" in metrics
+    key = "localisation_mm" if experiment == "ert_localisation" else "force_error_n"
+    assert 0.0 < metrics[key][0] < 200.0
+
+
+def test_two_point_study_gives_a_p_value_per_location_and_distance(compose_config, tmp_path):
+    cfg = compose_config(["experiment=ert_two_point", "scene=ert_internal", *TINY, "study.n_repeats=3",
+                          "scene.distances_mm=[20,60]"])
+    metrics = run(cfg, tmp_path)
+    table = metrics["p_table_seed0"]
+    assert set(table) == {1, 2, 3} and all(set(row) == {20.0, 60.0} for row in table.values())
+    assert all(0.0 <= p <= 1.0 for row in table.values() for p in row.values())
+
+
+@pytest.mark.slow
+def test_injection_study_sweeps_pair_counts(compose_config, tmp_path):
+    cfg = compose_config(["experiment=ert_injection", "scene=ert_internal", *TINY[:-1], "study.pair_counts=[12,24]"])
+    metrics = run(cfg, tmp_path)
+    assert (tmp_path / "injection_selection.png").exists() and (tmp_path / "accuracy_vs_time.csv").exists()
+    assert {row["order"] for row in metrics["accuracy_vs_time"]} == {"optimal", "random", "adjacent"}
+
+
+@pytest.mark.slow
+def test_learned_study_compares_with_tikhonov_on_the_same_presses(compose_config, tmp_path):
+    cfg = compose_config(["experiment=ert_learned", "scene=ert_boundary", *TINY, "study.n_train=80",
+                          "study.models.extra_trees.n_estimators=5", "study.models.resmlp.max_epochs=2"])
+    metrics = run(cfg, tmp_path)
+    models = {row["model"] for row in metrics["summary"]}
+    assert models == {"tikhonov", "extra_trees", "resmlp"}
+    table = (tmp_path / "learned_vs_tikhonov.csv").read_text()
+    assert "coverage_force" in table
