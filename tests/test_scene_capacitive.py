@@ -12,7 +12,8 @@ from hypothesis import given, settings, strategies as st
 from omegaconf import OmegaConf
 
 import data.scenes.capacitive6x6 as capacitive
-from data.contact_streams import SESSIONS, TRUTH_COLUMNS, ContactStream, load_frames, save_frames_csv
+from data.contact_sessions import SESSIONS
+from data.contact_streams import TRUTH_COLUMNS, ContactStream, load_frames, save_frames_csv
 from data.errors import InputError
 from data.scenes.capacitive6x6 import Capacitive6x6Scene, channel_names
 from data.scenes.capacitive6x6_effects import EFFECTS, FULL_SCALE_COUNTS

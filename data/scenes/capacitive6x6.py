@@ -48,7 +48,8 @@ from functools import lru_cache
 import numpy as np
 import pandas as pd
 
-from data.contact_streams import SESSIONS, Choreography, ContactStream, check_grid, choreograph
+from data.contact_sessions import SESSIONS, Choreography, choreograph
+from data.contact_streams import ContactStream, check_grid
 from data.errors import InputError
 from data.physics.elastic_half_space import disc_quadrature, vertical_stress_pa
 from data.scenes.capacitive6x6_effects import EFFECTS, MATERIAL_EFFECTS, READING_EFFECTS
