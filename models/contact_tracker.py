@@ -49,6 +49,7 @@ Speed: a frame with no cell above threshold skips clustering (as the paper). Eve
 handful of numpy calls on the few cells above threshold; ids and tracks are the only Python
 loops (over contacts, not cells).
 """
+import collections
 import functools
 import math
 from dataclasses import dataclass
@@ -63,6 +64,7 @@ THRESHOLDS = ("std", "variance")
 SEGMENTATIONS = ("ours", "paper")
 TRACKINGS = ("global", "paper")
 FORCE_FEATURES = ("peak", "sum", "mean")
+HISTORY_FRAMES = 10  # centroids kept per track for the velocity a merge remembers (1/6 s at 60 frames/s)
 MAX, MIN, ALL, ANY = np.maximum.reduce, np.minimum.reduce, np.logical_and.reduce, np.logical_or.reduce
 
 
@@ -92,15 +94,29 @@ class FrameContacts:
 
 class _Track:
     """A contact followed over frames (ours). `memory`: contacts merged into this one, as
-    (id, birth, x, y, vx, vy, frame) at the moment they merged, this track's own state included."""
-    __slots__ = ("id", "birth", "cells", "size", "x", "y", "vx", "vy", "missing", "memory")
+    (id, birth, x, y, vx, vy, frame) at the moment they merged, this track's own state included.
+    `path`: its last HISTORY_FRAMES (frame, x, y), for the velocity a merge remembers."""
+    __slots__ = ("id", "birth", "cells", "size", "x", "y", "vx", "vy", "missing", "memory", "path")
 
-    def __init__(self, track_id, birth, cells, x, y, size):
+    def __init__(self, track_id, birth, cells, x, y, size, frame=None):
         self.id, self.birth, self.cells, self.size = track_id, birth, cells, size
         self.x, self.y, self.vx, self.vy, self.missing, self.memory = x, y, 0.0, 0.0, 0, []
+        self.path = collections.deque([(birth if frame is None else frame, x, y)], maxlen=HISTORY_FRAMES)
 
     def snapshot(self, frame):
-        return (self.id, self.birth, self.x, self.y, self.vx, self.vy, frame)
+        """(id, birth, x, y, vx, vy, frame). The velocity is the least-squares slope of the
+        centroid over the last HISTORY_FRAMES frames, not the running average the gate uses:
+        two contacts about to merge pull each other's centroids sideways for the last few
+        frames, and the remembered velocity has to carry a contact through the whole merge
+        (up to 30 frames) to give it its id back at the split."""
+        vx, vy = self.vx, self.vy
+        if len(self.path) >= 3:
+            t, x, y = zip(*self.path)
+            t_mean, x_mean, y_mean = sum(t) / len(t), sum(x) / len(x), sum(y) / len(y)
+            spread = sum((a - t_mean) ** 2 for a in t)
+            vx = sum((a - t_mean) * (b - x_mean) for a, b in zip(t, x)) / spread
+            vy = sum((a - t_mean) * (b - y_mean) for a, b in zip(t, y)) / spread
+        return (self.id, self.birth, self.x, self.y, vx, vy, frame)
 
 
 def otsu_threshold(values: np.ndarray) -> float:
@@ -642,7 +658,8 @@ class ContactTracker(BaseEstimator):
                     det_of[t] = d
                     track_of[d] = t
                     continue
-                track = _Track(snap[0], snap[1], det_cells[d], float(det_x[d]), float(det_y[d]), float(det_size[d]))
+                track = _Track(snap[0], snap[1], det_cells[d], float(det_x[d]), float(det_y[d]), float(det_size[d]),
+                               frame=self.frame_index_)
                 track.vx, track.vy = snap[4], snap[5]
                 reinstated.append(track)
                 ids[d] = track.id
@@ -660,7 +677,7 @@ class ContactTracker(BaseEstimator):
             if d is None:
                 unmatched.append(track)
             else:
-                self._move(track, d, det_cells, det_size, det_x, det_y)
+                self._move(track, d, det_cells, det_size, det_x, det_y, self.frame_index_)
                 ids[d] = track.id
         self.tracks_ = survivors + reinstated
         self.track_cells_, self.track_ids_ = None, None
@@ -679,11 +696,13 @@ class ContactTracker(BaseEstimator):
         tracks = self.tracks_
         if self.track_ids_ is None:
             self.track_ids_ = np.array([t.id for t in tracks], dtype=np.int64)
+        frame = self.frame_index_
         for track, (x, y), size in zip(tracks, xy_mm[cols].tolist(), det_size[cols].tolist()):
             steps = track.missing + 1
             track.vx = 0.7 * track.vx + 0.3 * (x - track.x) / steps
             track.vy = 0.7 * track.vy + 0.3 * (y - track.y) / steps
             track.x, track.y, track.size, track.missing = x, y, size, 0
+            track.path.append((frame, x, y))
         track_of = self.track_of_  # detection number -> track index + 1
         track_of[cols + 1] = self.contact_numbers_[:len(cols), 0]
         owner = self.owner_buffer_
@@ -710,7 +729,7 @@ class ContactTracker(BaseEstimator):
             track.cells = cells
 
     @staticmethod
-    def _move(track, d, det_cells, det_size, det_x, det_y):
+    def _move(track, d, det_cells, det_size, det_x, det_y, frame):
         """A track found again: its cells, its centroid, and a velocity (mm per frame, an
         exponential average with weight 0.3 on the newest step: a light touch's centroid jumps
         between crossings, which must not read as motion) for the distance gate's prediction."""
@@ -719,6 +738,7 @@ class ContactTracker(BaseEstimator):
         track.vx = 0.7 * track.vx + 0.3 * (x - track.x) / steps
         track.vy = 0.7 * track.vy + 0.3 * (y - track.y) / steps
         track.x, track.y, track.cells, track.size, track.missing = x, y, det_cells[d], float(det_size[d]), 0
+        track.path.append((frame, x, y))
 
     def _split_by_memory(self, parent, kids, det_x, det_y) -> dict:
         """Children of a region that holds merged contacts get those contacts back by position:

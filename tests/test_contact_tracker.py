@@ -387,3 +387,19 @@ def test_the_gate_also_holds_around_the_last_centroid():
     results = run(ContactTracker(rows=6, cols=6, pitch_mm=PITCH), rest, live)
     assert all(len(r) == 1 for r in results)
     assert {int(i) for r in results for i in r.ids} == {1}
+
+
+def test_a_merge_remembers_the_velocity_of_the_path_not_of_the_last_pull():
+    # a contact gliding +1 mm/frame along x whose centroid is pulled 2 mm sideways on the two
+    # frames before it merges (a neighbour's load): the remembered velocity is the slope over
+    # its last frames, so it still points along x (the running average would not)
+    from models.contact_tracker import _Track
+    track = _Track(1, 0, None, 0.0, 18.0, 4.0)
+    for frame in range(1, 10):
+        y = 18.0 if frame < 8 else 16.0
+        track.vy = 0.7 * track.vy + 0.3 * (y - track.y)
+        track.x, track.y = float(frame), y
+        track.path.append((frame, track.x, y))
+    _, _, x, y, vx, vy, _ = track.snapshot(9)
+    assert vx == pytest.approx(1.0, abs=0.05)
+    assert abs(vy) < 0.25 < abs(track.vy)
