@@ -5,7 +5,6 @@ An exception is listed below with its reason; nothing else may fail.
 """
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from models.classic_regressors import ClassicRegressor
 from models.kfold_blend import KFoldBlend
 from models.resmlp_regressor import ResMLPRegressor
 from models.trees import TreeRegressor
@@ -32,9 +31,6 @@ ESTIMATORS = [
                                               n_folds=3, progress=False)}, weights="stacking"),
     ValidationWeightedBlend({"et": tiny_forest(), "dt": TreeRegressor(kind="decision_tree", max_features=None)},
                             weights="paper"),
-    ClassicRegressor(kind="linear_regression"),
-    ClassicRegressor(kind="svr"),
-    ClassicRegressor(kind="gaussian_process"),
 ]
 
 EXPECTED_FAILURES = {
