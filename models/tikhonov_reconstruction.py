@@ -210,6 +210,27 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
         X = self._check_X(X, self.n_features_in_)
         return self._deconvolve(X @ self.inverse_.T) * self.coefficient_field_
 
+    def peak_window(self, X, half_width_px: int = 2) -> tuple[np.ndarray, np.ndarray]:
+        """Features for a learned correction of the reconstruction: (peak_xy_mm (n, 2), features
+        (n, 3 + (2h + 1)^2)). The peak is the force-pixel image's largest pixel (its centre in mm);
+        the features are that centre, the image's total force and the (2h + 1)^2 pixels around the
+        peak (zero outside the sheet). The window moves with the press, so what a model learns
+        from it (sub-pixel position from how the load shares between neighbouring pixels) carries
+        over between places; a drift of the base fabric adds only its small local share."""
+        pixels = self.force_pixels(X)
+        n, h = self.pixels_per_side, int(half_width_px)
+        if h < 0:
+            raise InputError(f"peak_window: half_width_px must be >= 0, got {half_width_px}")
+        images = np.pad(pixels.reshape(-1, n, n), ((0, 0), (h, h), (h, h)))
+        peak = pixels.argmax(axis=1)
+        iy, ix = peak // n, peak % n
+        offsets = np.arange(2 * h + 1)
+        window = images[np.arange(len(images))[:, None, None], iy[:, None, None] + offsets[None, :, None],
+                        ix[:, None, None] + offsets[None, None, :]].reshape(len(images), -1)
+        pixel_mm = self.geometry["side_mm"] / n
+        peak_xy_mm = np.column_stack([(ix + 0.5) * pixel_mm, (iy + 0.5) * pixel_mm])
+        return peak_xy_mm, np.column_stack([peak_xy_mm, pixels.sum(axis=1), window])
+
     def predict(self, X) -> np.ndarray:
         """(n_frames, 3): x_mm, y_mm of the pressure field's peak and force_n, its integral."""
         xy, force = self._locate(self.force_pixels(X))

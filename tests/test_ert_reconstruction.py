@@ -38,6 +38,20 @@ def test_fit_returns_self_with_learned_state_and_localises_presses(fitted):
     assert np.corrcoef(prediction[:, 2], table.targets[:, 2])[0, 1] > 0.8
 
 
+def test_peak_window_centres_on_the_image_peak_and_keeps_its_pixels(fitted):
+    scene, table, model = fitted
+    peak_xy_mm, features = model.peak_window(table.channels[:5], half_width_px=1)
+    pixels = model.force_pixels(table.channels[:5])
+    assert features.shape == (5, 3 + 9)
+    assert np.allclose(features[:, :2], peak_xy_mm)
+    assert np.allclose(features[:, 2], pixels.sum(axis=1))
+    assert np.allclose(features[:, 3 + 4], pixels.max(axis=1))      # the window's centre is the peak
+    assert (np.abs(peak_xy_mm - table.targets[:5, :2]) <= 30.0).all()
+    # a blank frame peaks at the first pixel, the corner: its window reaches off the sheet (zeros)
+    corner_xy_mm, corner = model.peak_window(np.zeros((1, table.channels.shape[1])), half_width_px=1)
+    assert np.allclose(corner_xy_mm, 5.0) and np.array_equal(corner[0, 3:], np.zeros(9))   # 10 mm pixels
+
+
 def test_pressure_field_integrates_to_the_predicted_force(fitted):
     _, table, model = fitted
     field = model.pressure_field_kpa(table.channels[:3])

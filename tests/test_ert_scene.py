@@ -103,12 +103,30 @@ def test_the_paper_layouts_compose_with_276_injections_and_24_measurements(compo
     ({"injection": [[2, 2]]}, r"injection pair \[2, 2\]"),
     ({"measurement": "opposite"}, "unknown measurement pattern 'opposite'"),
     ({"protocol": "sweep"}, "scene.protocol must be one of"),
+    ({"recording_presses": 0}, "recording_presses must be >= 1"),
     ({"effects": {"contact_resistance": {"saturated_fraction": 0.0}}}, "0 < saturated_fraction <= 1"),
     ({"effects": {"humidity": {}}}, "unknown effect 'humidity'"),
 ])
 def test_bad_scene_input_is_one_line(kwargs, message):
     with pytest.raises(InputError, match=message):
         ERTScene(**{**SMALL, "grid_points_per_side": 2, "n_force_levels": 1, **kwargs}).generate()
+
+
+def test_recordings_restart_the_baseline_drift_and_are_the_groups():
+    contacts = np.tile([[60.0, 60.0, 8.0]], (12, 1))
+    drift = {"contact_resistance": {}, "baseline_drift": {"fraction_per_50_presses": 0.5}}
+    one = presses(contacts, effects=drift)
+    split = presses(contacts, effects=drift, recording_presses=4)
+    still = presses(contacts)                     # no drift: every frame the same
+    assert np.array_equal(split.groups, np.repeat([0, 1, 2], 4))
+    assert len(np.unique(one.groups)) == 12
+    # the same draws, restarted: recording 3's first frame carries one step of the walk, not nine
+    scale = np.abs(one.channels).max()
+    assert np.allclose(split.channels[8] - still.channels[8], one.channels[8] - one.channels[7], atol=1e-9 * scale)
+    drift_split = np.abs(split.channels - still.channels).sum(axis=1)
+    drift_one = np.abs(one.channels - still.channels).sum(axis=1)
+    assert drift_split[8] < drift_one[8]
+    assert np.allclose(split.channels[:4], one.channels[:4])   # the first recording is unchanged
 
 
 # -- property tests: finite readings and reconstructions at the extremes ---------------------------

@@ -3,6 +3,8 @@ import json
 
 import pytest
 
+from data.errors import InputError
+from models.runs.ert_learned import run_learned
 from models.runs.run import run
 
 TINY = ["study.seeds=[0,1]", "study.calibration.grid_points_per_side=4", "scene.grid_points_per_side=4",
@@ -43,10 +45,25 @@ def test_injection_study_sweeps_pair_counts(compose_config, tmp_path):
 
 @pytest.mark.slow
 def test_learned_study_compares_with_tikhonov_on_the_same_presses(compose_config, tmp_path):
-    cfg = compose_config(["experiment=ert_learned", "scene=ert_boundary", *TINY, "study.n_train=80",
-                          "study.models.extra_trees.n_estimators=5", "study.models.resmlp.max_epochs=2"])
+    # test recording: 4 x 4 points x 3 forces = 48 presses; 5 training recordings of 48
+    cfg = compose_config(["experiment=ert_learned", "scene=ert_boundary", *TINY, "study.n_train=240",
+                          "study.models.extra_trees.n_estimators=5", "study.models.resmlp.max_epochs=2",
+                          "model.candidates.resmlp.estimator.max_epochs=2", "model.candidates.random_forest.estimator.n_estimators=3",
+                          "model.candidates.extra_trees.estimator.n_estimators=3"])
     metrics = run(cfg, tmp_path)
     models = {row["model"] for row in metrics["summary"]}
-    assert models == {"tikhonov", "extra_trees", "resmlp"}
+    assert models == {"tikhonov", "extra_trees", "resmlp", "blend"}
+    assert metrics["features"] == "tikhonov_peak_window"
     table = (tmp_path / "learned_vs_tikhonov.csv").read_text()
     assert "coverage_force" in table
+
+
+
+@pytest.mark.parametrize("option, message", [({"features": "pixels"}, "features must be one of"),
+                                             ({"conformal_on": "test"}, "conformal_on must be"),
+                                             ({"models": {"svm": {}}}, "unknown model 'svm'")])
+def test_learned_study_bad_options_are_one_line_before_any_work(compose_config, tmp_path, option, message):
+    cfg = compose_config(["experiment=ert_learned", "scene=ert_boundary"])
+    with pytest.raises(InputError, match=message):
+        run_learned(cfg, tmp_path, **option)
+    assert not any(tmp_path.iterdir())
