@@ -14,6 +14,7 @@ import argparse
 import os
 import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -47,7 +48,8 @@ def prcnn_epoch() -> None:
 
 
 def wall_time(workload: str, threads: str, out: Path) -> float:
-    command = [part.format(out=out) for part in WORKLOADS[workload]]
+    out = Path(tempfile.mkdtemp(dir=out))  # a fresh run folder per run
+    command = [part.format(out=out / "run") for part in WORKLOADS[workload]]
     env = dict(os.environ, TOUCHSTONE_THREADS=threads, CI="true")
     for name in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
         env.pop(name, None)  # `all` must mean every library's own default
@@ -68,6 +70,7 @@ def main(argv=None):
     if args.child_prcnn_epoch:
         return prcnn_epoch()
     out = ROOT / "outputs" / "bench_threads"
+    out.mkdir(parents=True, exist_ok=True)
     rows = []
     for workload in args.workloads:
         for threads in ("all", "1"):

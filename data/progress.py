@@ -2,7 +2,8 @@
 
 On a terminal a long loop shows a tqdm bar. Where nobody watches a bar (output redirected to a
 file, a Hydra log, CI with CI=true), carriage-return updates only bloat the file: each loop and
-each phase writes one log line with its count and duration when it ends instead.
+each phase writes one log line with its count and duration when it ends instead, and a loop
+that runs longer than HEARTBEAT_S adds one line per HEARTBEAT_S so a long phase is never silent.
 
     for fold in progress(folds, desc="k-fold"): ...
     bar = progress(total=n, desc="rubber12", unit="press"); bar.update(k); bar.close()
@@ -17,6 +18,7 @@ from contextlib import contextmanager
 from tqdm.auto import tqdm
 
 log = logging.getLogger("touchstone")
+HEARTBEAT_S = 30.0
 
 
 def on_terminal() -> bool:
@@ -32,19 +34,28 @@ class _Quiet:
     def __init__(self, iterable, desc, total, unit, enabled):
         self.iterable, self.desc, self.total, self.unit = iterable, desc, total, unit
         self.enabled, self.n, self.postfix = enabled, 0, ""
-        self.start = time.perf_counter()
+        self.start = self.last_line = time.perf_counter()
         self.closed = False
 
     def __iter__(self):
         try:
             for item in self.iterable:
                 self.n += 1  # counted on entry, so a loop left by `break` reports its last round
+                self._heartbeat()
                 yield item
         finally:  # also when the loop is left early (the generator is closed)
             self.close()
 
     def update(self, n=1):
         self.n += n
+        self._heartbeat()
+
+    def _heartbeat(self):
+        now = time.perf_counter()
+        if self.enabled and now - self.last_line >= HEARTBEAT_S:
+            self.last_line = now
+            of = f"/{self.total}" if self.total else ""
+            log.info("%s: %d%s %s so far, %.0f s", self.desc, self.n, of, self.unit, now - self.start)
 
     def set_postfix(self, values=None, **kwargs):
         values = dict(values or {}, **kwargs)

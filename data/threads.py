@@ -2,11 +2,12 @@
 
 Left to themselves torch, the BLAS behind numpy and scipy, OpenMP and onnxruntime each start one
 thread per core. On a quiet machine that is fine; beside any other busy process (a second run,
-a sweep's parallel jobs, a test suite) their threads wait on each other and small workloads slow
-down 3-30x (measured: bench/threads.py, README "Threads"). The small nets, the simulator and
-the per-row forests here gain little from a second thread even on an idle machine, so the
-default is one thread per process; `threads=all` gives every core to one run (a paper-size
-run alone on a big machine).
+a sweep's parallel jobs, a test suite) their threads wait on each other. Measured on a 2-core
+machine (bench/threads.py, README "Speed, threads and progress"): with every library's default
+the default run, a resmlp run and a PR-CNN epoch ran 2.3-2.8x slower beside one busy process;
+with one thread 0.97-1.10x. On an idle machine one thread costs 10 % on the default run and 60 %
+on a PR-CNN epoch, so the default is one thread per process (robust wherever it runs) and
+`threads=all` gives every core to a run that has the machine to itself.
 
 The setting comes from the config (`threads=2`) or, for scripts and child processes, from the
 environment variable TOUCHSTONE_THREADS. Applying it sets the usual environment variables (for

@@ -155,3 +155,15 @@ def test_predictions_csv_feeds_predict_py_with_the_same_columns(tmp_path):
     assert list(theirs.columns) == targets
     assert {f"r_{k:02d}_ohm" for k in range(1, 13)} | set(targets) | {f"true_{t}" for t in targets} <= set(ours)
     np.testing.assert_allclose(theirs[targets].to_numpy(), ours[targets].to_numpy(), rtol=1e-4, atol=1e-3)
+
+
+def test_a_long_loop_off_a_terminal_says_how_far_it_is(caplog, monkeypatch):
+    monkeypatch.setenv("CI", "true")
+    monkeypatch.setattr("data.progress.HEARTBEAT_S", 0.0)    # every round counts as long
+    with caplog.at_level(logging.INFO, logger="touchstone"):
+        for _ in progress(range(3), desc="epochs", unit="epochs"):
+            pass
+    lines = [r.getMessage() for r in caplog.records]
+    assert [line.split(" so far")[0] for line in lines[:3]] == ["epochs: 1/3 epochs", "epochs: 2/3 epochs",
+                                                               "epochs: 3/3 epochs"]
+    assert lines[3].startswith("epochs: 3 epochs in ")
