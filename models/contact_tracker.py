@@ -50,7 +50,6 @@ handful of numpy calls on the few cells above threshold; ids and tracks are the 
 loops (over contacts, not cells).
 """
 import collections
-import functools
 import math
 from dataclasses import dataclass
 
@@ -59,6 +58,8 @@ from scipy.optimize import linear_sum_assignment
 from sklearn.base import BaseEstimator
 
 from data.errors import InputError
+from models.otsu_threshold import otsu_threshold
+from models.paper_contact_tracking import paper_track_clusters
 
 THRESHOLDS = ("std", "variance")
 SEGMENTATIONS = ("ours", "paper")
@@ -117,64 +118,6 @@ class _Track:
             vx = sum((a - t_mean) * (b - x_mean) for a, b in zip(t, x)) / spread
             vy = sum((a - t_mean) * (b - y_mean) for a, b in zip(t, y)) / spread
         return (self.id, self.birth, self.x, self.y, vx, vy, frame)
-
-
-def otsu_threshold(values: np.ndarray) -> float:
-    """Otsu's threshold (Otsu 1979, eq. 18: maximise the between-class variance
-    sigma_B^2 = (mu_T omega(k) - mu(k))^2 / (omega(k) (1 - omega(k)))) over the sorted values
-    themselves rather than a 256-bin histogram: exact for the few cells of a frame. Returns t
-    such that `values >= t` is the upper class; with a single distinct value everything is."""
-    v = np.sort(values)
-    n = v.size
-    low, high = v[[0, -1]].tolist()
-    if low == high:
-        return low
-    k, k_times_rest = _split_counts(n)
-    below = v[:-1].cumsum()
-    # n^2 sigma_B^2 up to a constant factor: (S(k) - k S(n)/n)^2 / (k (n - k)); in place, fewest calls
-    between = k * ((float(below[-1]) + high) / n)
-    np.subtract(below, between, out=between)
-    between *= between
-    between /= k_times_rest
-    between *= v[1:] > v[:-1]  # a split must fall between two distinct values (between >= 0; the best is > 0)
-    return float(v[int(between.argmax()) + 1])
-
-
-@functools.lru_cache(maxsize=512)
-def _split_counts(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """k = 1..n-1 and k (n - k): the class sizes of every split of n sorted values."""
-    k = np.arange(1.0, n)
-    return k, k * (n - k)
-
-
-def paper_track_clusters(prev_ids, prev_cells, next_ids, next_cells):
-    """The public code's track_clusters (capsensor-monitor src/processor_utils.py), same
-    decisions, Jaccard vectorised. prev_cells/next_cells: one-hot (clusters x cells) bool.
-    next_ids are the connected-component labels. Returns the renumbered ids 1..n."""
-    if len(prev_ids) == 0 or len(next_ids) == 0:
-        return np.asarray(next_ids, dtype=np.int64)
-    inter = next_cells.astype(np.float32) @ prev_cells.T.astype(np.float32)
-    union = next_cells.sum(1)[:, None] + prev_cells.sum(1)[None, :] - inter
-    jaccard = np.where(inter > 0, inter / np.maximum(union, 1), 0.0)
-    max_label = int(np.max(next_ids))
-    assigned = []
-    labels = []
-    for row in jaccard:
-        best = int(np.argmax(row))
-        if math.isclose(row[best], 0):
-            label = max_label
-            max_label += 1
-        else:
-            label = int(prev_ids[best])
-        if label in assigned:
-            label += 1
-            max_label = max(label, max_label)
-        assigned.append(label)
-        labels.append(label)
-    order = sorted(range(len(labels)), key=lambda i: labels[i])  # stable, as list.sort
-    renumbered = np.empty(len(labels), dtype=np.int64)
-    renumbered[order] = np.arange(1, len(labels) + 1)
-    return renumbered
 
 
 class ContactTracker(BaseEstimator):

@@ -13,7 +13,9 @@ from skimage.filters import threshold_otsu
 from skimage.measure import label
 
 from data.errors import InputError
-from models.contact_tracker import ContactTracker, otsu_threshold, paper_track_clusters
+from models.contact_tracker import ContactTracker
+from models.otsu_threshold import otsu_threshold
+from models.paper_contact_tracking import paper_track_clusters
 from models.report.tracking_metrics import evaluate_tracking, frame_groups
 
 PITCH = 6.0
