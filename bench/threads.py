@@ -18,6 +18,8 @@ import tempfile
 import time
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 WORKLOADS = {
     "default_run": [sys.executable, "train.py", "hydra.run.dir={out}"],
@@ -64,7 +66,7 @@ def wall_time(workload: str, threads: str, out: Path) -> float:
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--workloads", nargs="*", default=list(WORKLOADS))
-    parser.add_argument("--repeats", type=int, default=1, help="best of this many runs per cell")
+    parser.add_argument("--repeats", type=int, default=1, help="runs per cell (mean ± sd when more than one)")
     parser.add_argument("--child-prcnn-epoch", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.child_prcnn_epoch:
@@ -78,18 +80,23 @@ def main(argv=None):
             for load in ("idle", "one busy process"):
                 busy = subprocess.Popen([sys.executable, "-c", "while True: pass"]) if load != "idle" else None
                 try:
-                    times[load] = min(wall_time(workload, threads, out) for _ in range(args.repeats))
+                    times[load] = np.array([wall_time(workload, threads, out) for _ in range(args.repeats)])
                 finally:
                     if busy is not None:
                         busy.kill()
                         busy.wait()
             rows.append((workload, threads, times["idle"], times["one busy process"]))
-            print(f"{workload:12s} threads={threads:3s} idle {times['idle']:7.1f} s   "
-                  f"beside one busy process {times['one busy process']:7.1f} s   "
-                  f"slowdown {times['one busy process'] / times['idle']:.2f}x", flush=True)
+            print(f"{workload:12s} threads={threads:3s} idle {spread(times['idle'])} s   "
+                  f"beside one busy process {spread(times['one busy process'])} s   "
+                  f"slowdown {times['one busy process'].mean() / times['idle'].mean():.2f}x", flush=True)
     print(f"\n| workload | threads | idle (s) | beside one busy process (s) | slowdown |\n|---|---|---|---|---|")
     for workload, threads, idle, loaded in rows:
-        print(f"| {workload} | {threads} | {idle:.1f} | {loaded:.1f} | {loaded / idle:.2f}x |")
+        print(f"| {workload} | {threads} | {spread(idle)} | {spread(loaded)} | {loaded.mean() / idle.mean():.2f}x |")
+
+
+def spread(values) -> str:
+    """mean ± sd over repeats (one value alone as it is)."""
+    return f"{values.mean():.1f}" if len(values) == 1 else f"{values.mean():.1f} ± {values.std(ddof=1):.1f}"
 
 
 if __name__ == "__main__":
