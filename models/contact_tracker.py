@@ -40,10 +40,10 @@ Two trackers:
   Kuhn-Munkres) with a minimum overlap; pairs with no overlap may still match within a distance
   gate around the track's predicted centroid (fast moves) or its last one (a light touch whose
   centroid jumps between crossings, where the velocity estimate is noise); merge: the older id survives and the
-  younger is remembered inside it; split: the larger child keeps the id, unless the region
-  holds remembered contacts, then children and remembered contacts are matched by predicted
-  position; a contact is retired only after `max_missing_frames` frames without a match, so a
-  one-frame dropout does not renumber it.
+  younger is remembered inside it, and the region is reported at the older member's cluster of a
+  weighted k-means over the region; split: the larger child keeps the id, unless the region holds
+  remembered contacts, then children and remembered contacts are matched by predicted position; a contact is retired only after `max_missing_frames` frames without a
+  match, so a one-frame dropout does not renumber it.
 
 Speed: a frame with no cell above threshold skips clustering (as the paper). Everything is a
 handful of numpy calls on the few cells above threshold; ids and tracks are the only Python
@@ -97,11 +97,12 @@ class _Track:
     """A contact followed over frames (ours). `memory`: contacts merged into this one, as
     (id, birth, x, y, vx, vy, frame) at the moment they merged, this track's own state included.
     `path`: its last HISTORY_FRAMES (frame, x, y), for the velocity a merge remembers."""
-    __slots__ = ("id", "birth", "cells", "size", "x", "y", "vx", "vy", "missing", "memory", "path")
+    __slots__ = ("id", "birth", "cells", "size", "x", "y", "vx", "vy", "missing", "memory", "path", "member_xy")
 
     def __init__(self, track_id, birth, cells, x, y, size, frame=None):
         self.id, self.birth, self.cells, self.size = track_id, birth, cells, size
         self.x, self.y, self.vx, self.vy, self.missing, self.memory = x, y, 0.0, 0.0, 0, []
+        self.member_xy = None  # while merged: each member's position in the region (k-means), memory's order
         self.path = collections.deque([(birth if frame is None else frame, x, y)], maxlen=HISTORY_FRAMES)
 
     def snapshot(self, frame):
@@ -260,6 +261,7 @@ class ContactTracker(BaseEstimator):
         self.value_ = np.full(self.n_cells_ + 1, -np.inf)     # scratch for _segment_ours
         self.padded_load_ = np.full(self.n_cells_ + 1, -np.inf)
         self.gate_mm_ = 2.0 * self.pitch_mm if self.gate_mm is None else float(self.gate_mm)
+        self.grid_mm_ = np.array([cols, rows], dtype=np.float64) * float(self.pitch_mm)
         self.empty_labels_ = np.zeros((rows, cols), dtype=np.int64)
         self.empty_labels_.flags.writeable = False
         self.reset()
@@ -557,13 +559,18 @@ class ContactTracker(BaseEstimator):
         ids = np.zeros(n_det, dtype=np.int64)
         track_of = {d: t for t, d in det_of.items()}                    # detection -> track index
         fresh = [t.missing == 0 for t in tracks]                         # seen last frame
-        # merge: a fresh unmatched track whose cells mostly lie in a matched detection
+        # merge: a fresh unmatched track that a matched detection has taken in: most of its cells
+        # in the region, or some of them with its predicted centroid within a pitch of the
+        # region's (an Otsu core shrinks as two contacts join)
         merged = set()
         for t in range(len(tracks)):
             if t in det_of or t in merged or not fresh[t]:
                 continue
             d = int(np.argmax(inter[t]))
-            if inter[t, d] < 0.5 * tracks[t].size or d not in track_of:
+            if d not in track_of or inter[t, d] <= 0:
+                continue
+            near = math.hypot(state[t, 1] - det_x[d], state[t, 2] - det_y[d]) <= self.pitch_mm
+            if inter[t, d] < 0.5 * tracks[t].size and not near:
                 continue
             m = track_of[d]
             older, younger = (t, m) if (tracks[t].birth, tracks[t].id) < (tracks[m].birth, tracks[m].id) else (m, t)
@@ -572,6 +579,7 @@ class ContactTracker(BaseEstimator):
                 host.memory.append(host.snapshot(self.frame_index_))
             host.memory.append(guest.snapshot(self.frame_index_))
             host.memory.extend(guest.memory[1:] if guest.memory else [])
+            host.member_xy = None
             merged.add(younger)
             det_of.pop(m, None)
             det_of[older] = d
@@ -608,6 +616,7 @@ class ContactTracker(BaseEstimator):
                 ids[d] = track.id
                 back.add(snap[0])
             parent.memory = [s for s in parent.memory if s[0] not in back]
+            parent.member_xy = None
             if len(parent.memory) == 1:  # only its own snapshot left: nothing merged any more
                 parent.memory = []
         # update matched tracks; age the others; new ids for what is left
@@ -621,6 +630,8 @@ class ContactTracker(BaseEstimator):
                 unmatched.append(track)
             else:
                 self._move(track, d, det_cells, det_size, det_x, det_y, self.frame_index_)
+                if track.memory:
+                    self._update_members(track, np.flatnonzero(det_cells[d]), xy_mm[d])
                 ids[d] = track.id
         self.tracks_ = survivors + reinstated
         self.track_cells_, self.track_ids_ = None, None
@@ -640,12 +651,14 @@ class ContactTracker(BaseEstimator):
         if self.track_ids_ is None:
             self.track_ids_ = np.array([t.id for t in tracks], dtype=np.int64)
         frame = self.frame_index_
-        for track, (x, y), size in zip(tracks, xy_mm[cols].tolist(), det_size[cols].tolist()):
+        for track, (x, y), size, col in zip(tracks, xy_mm[cols].tolist(), det_size[cols].tolist(), cols.tolist()):
             steps = track.missing + 1
             track.vx = 0.7 * track.vx + 0.3 * (x - track.x) / steps
             track.vy = 0.7 * track.vy + 0.3 * (y - track.y) / steps
             track.x, track.y, track.size, track.missing = x, y, size, 0
             track.path.append((frame, x, y))
+            if track.memory:
+                self._update_members(track, cells[contact == col + 1], xy_mm[col])
         track_of = self.track_of_  # detection number -> track index + 1
         track_of[cols + 1] = self.contact_numbers_[:len(cols), 0]
         owner = self.owner_buffer_
@@ -655,6 +668,44 @@ class ContactTracker(BaseEstimator):
         ids = np.empty(len(cols), dtype=np.int64)
         ids[cols] = self.track_ids_
         return ids
+
+    def _update_members(self, track, region_cells, xy_mm):
+        """Where each member of a merged region is: a few Lloyd iterations of k-means (Lloyd 1982),
+        k = the region's members, on the region's cells and their neighbours above threshold,
+        weighted by load, started from each member's position last frame (at the merge: where
+        it was). Two touches that one region covers pull a cluster each, so the region is
+        reported with the older id (the merge rule) at the older member's cluster (written
+        into xy_mm) rather than at the region's own centroid, which sits on the firmer touch
+        and wanders between them, carrying the older id from one true contact to the other.
+        The split still matches children by the motion each member had when it merged
+        (_split_by_memory): two touches passing straight through each other leave one round
+        region, whose k-means halves say nothing about who is who."""
+        cells = np.unique(self.neighbourhood_[region_cells])
+        weight = self.above_load_[cells]
+        cells, weight = cells[weight > 0], weight[weight > 0]
+        if track.member_xy is None or len(track.member_xy) != len(track.memory):
+            track.member_xy = np.array([(s[2], s[3]) for s in track.memory])
+        centres = track.member_xy
+        if len(cells) < len(centres):  # too few cells to place every member: the region's centroid
+            return
+        xy = self.cell_xy_mm_[cells]
+        for _ in range(3):
+            nearest = ((xy[:, None, :] - centres[None, :, :]) ** 2).sum(axis=2).argmin(axis=1)
+            total = np.bincount(nearest, weight, minlength=len(centres))
+            has = total > 0
+            for axis in (0, 1):
+                moment = np.bincount(nearest, weight * xy[:, axis], minlength=len(centres))
+                centres[has, axis] = moment[has] / total[has]
+        own = [s[0] for s in track.memory].index(track.id)
+        if total[own] > 0:
+            xy_mm[:] = centres[own]
+
+    def _member_predictions(self, snaps) -> np.ndarray:
+        """(members, 2): where each merged contact would be now, carried on from its position
+        and velocity when it merged for at most 30 frames (half a second at 60 frames/s)."""
+        ahead = np.array([min(self.frame_index_ - s[6], 30) for s in snaps], dtype=np.float64)
+        predicted = np.array([(s[2], s[3]) for s in snaps]) + np.array([(s[4], s[5]) for s in snaps]) * ahead[:, None]
+        return np.clip(predicted, 0.0, self.grid_mm_)  # never off the sensor
 
     def _one_hot(self, cells, contact, n) -> np.ndarray:
         one_hot = np.zeros((n, self.n_cells_), dtype=np.float32)
@@ -689,8 +740,7 @@ class ContactTracker(BaseEstimator):
         matched to the children by one assignment on distance; the region's own id is always placed.
         Returns child detection -> snapshot (id, birth, x, y, vx, vy, frame)."""
         snaps = parent.memory
-        ahead = np.array([min(self.frame_index_ - s[6], 30) for s in snaps], dtype=np.float64)
-        predicted = np.array([(s[2], s[3]) for s in snaps]) + np.array([(s[4], s[5]) for s in snaps]) * ahead[:, None]
+        predicted = self._member_predictions(snaps)
         kid_xy = np.stack([det_x[kids], det_y[kids]], axis=1)
         cost = np.linalg.norm(predicted[:, None, :] - kid_xy[None, :, :], axis=2)
         own = next(i for i, s in enumerate(snaps) if s[0] == parent.id)
