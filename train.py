@@ -125,7 +125,7 @@ def check_overrides(argv: list[str]) -> None:
         check_target_keys(cfg)
         if cfg.data.get("_target_", "").startswith("data.regression_datamodule."):
             check_split_settings(cfg.data.n_folds, cfg.data.test_fraction, cfg.data.val_fraction,
-                                 cfg.data.calibration_fraction)
+                                 cfg.data.calibration_fraction, cfg.data.split)
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
         sys.exit(2)

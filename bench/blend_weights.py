@@ -38,7 +38,7 @@ def one_seed(seed: int, overrides: list[str]) -> dict:
     seed_everything(seed)
     datamodule = instantiate(cfg.data).setup()
     (X, y), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
-    groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split == "grouped" else None
+    groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split in ("grouped", "predefined") else None
     paper = instantiate(cfg.model, weights="paper")
     start = time.perf_counter()
     paper.fit(X, y, X_val, y_val, groups=groups)

@@ -35,7 +35,7 @@ def main(argv=None):
     datamodule = instantiate(cfg.data).setup()
     (X, y), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     targets = datamodule.target_names
-    groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split == "grouped" else None
+    groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split in ("grouped", "predefined") else None
     predictions = {"single": [], "blend": []}
     r2 = {"single": [], "blend": []}
     seconds = {"single": 0.0, "blend": 0.0}

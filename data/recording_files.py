@@ -1,13 +1,17 @@
 """Users' own time-series recordings: NPZ arrays or a long-format table, as a RecordingSet.
 
 NPZ: `X`, a numeric array of shape (n, channels, length) (recordings of different lengths: cut
-them to a common length before saving); `y` labels (n,), numbers or strings, none missing (NaN)
-or empty; optional `force_level` (n,) in newtons, finite and >= 0, and `channel_names`
-(channels,). The file is opened with allow_pickle=False: an object array (which numpy can only
-store pickled, and unpickling can run code) is refused.
-Long table (CSV/Parquet): one row per time step with a recording id column, a time column,
-the channel columns and the label column(s); optional force-level column. Recordings are
-sorted by time and cut to the shortest.
+or pad them to a common length before saving); `y` labels (n,), numbers or strings, none missing
+(NaN) or empty; optional `force_level` (n,) in newtons, finite and >= 0, `channel_names`
+(channels,), `split` (n,) with train / val / test per recording (data.split=predefined) and
+`sample_rate_hz` (a scalar). The file is opened with allow_pickle=False: an object array (which
+numpy can only store pickled, and unpickling can run code) is refused.
+Long table (CSV/Parquet): one row per time step with a recording id column, a time column in
+seconds, the channel columns and the label column(s); optional force-level and split columns.
+Recordings are sorted by time; recordings of different lengths are an error unless a rule is
+stated (`lengths: crop` cuts all to the shortest, `pad` zero-pads all to the longest). The
+sample rate is the config's, else the NPZ's `sample_rate_hz`, else (table) one over the median
+time step; with none of them it is unknown (None) and the exported model says so.
 Any schema problem is a one-line InputError naming the file and what was expected.
 """
 from pathlib import Path
@@ -17,22 +21,48 @@ import pandas as pd
 
 from data.errors import InputError
 from data.recordings import RecordingSet
-from data.table_files import check_numeric_columns, read_table_file
+from data.splits import check_one_split_per_group, split_values
+from data.table_files import check_numeric_columns, read_table_file, where
 
 # What to save instead of an object array, per array of the NPZ.
 NPZ_EXPECTED = {"X": "a numeric float array X of shape (n, channels, length)",
                 "y": "y as a numeric or string array of shape (n,)",
                 "force_level": "force_level as a numeric float array of shape (n,) in newtons",
-                "channel_names": "channel_names as a string array of shape (channels,)"}
+                "channel_names": "channel_names as a string array of shape (channels,)",
+                "split": "split as a string array of shape (n,) with train / val / test",
+                "sample_rate_hz": "sample_rate_hz as a numeric scalar"}
+LENGTH_RULES = ("equal", "crop", "pad")
 
 
-def _stack(arrays, source):
-    lengths = [a.shape[-1] for a in arrays]
+def _stack(arrays, source, lengths="equal"):
+    """(n, channels, steps) from recordings of maybe different lengths, by the stated rule."""
+    if lengths not in LENGTH_RULES:
+        raise InputError(f"data.source.lengths must be one of {', '.join(LENGTH_RULES)}, got {lengths!r}")
+    steps = [a.shape[-1] for a in arrays]
     channels = {a.shape[0] for a in arrays}
     if len(channels) != 1:
         raise InputError(f"{source}: recordings have different channel counts {sorted(channels)}")
-    shortest = min(lengths)
+    if min(steps) != max(steps) and lengths == "equal":
+        raise InputError(f"{source}: recordings have different lengths ({min(steps)} to {max(steps)} steps); "
+                         "set data.source.lengths=crop (cut all to the shortest) or pad (zeros after the end, "
+                         "to the longest)")
+    if lengths == "pad":
+        longest = max(steps)
+        return np.stack([np.pad(a, ((0, 0), (0, longest - a.shape[-1]))) for a in arrays]).astype(np.float32)
+    shortest = min(steps)
     return np.stack([a[:, :shortest] for a in arrays]).astype(np.float32)
+
+
+def _sample_rate(configured, declared, source) -> float | None:
+    """The config's rate, else the data's own; both given and different is an error (which is real?)."""
+    for name, value in (("data.source.sample_rate_hz", configured), ("the data's sample rate", declared)):
+        if value is not None and not (np.isfinite(float(value)) and float(value) > 0):
+            raise InputError(f"{source}: {name} must be a positive number of hertz, got {value!r}")
+    if configured is not None and declared is not None and not np.isclose(float(configured), float(declared),
+                                                                           rtol=1e-3):
+        raise InputError(f"{source}: data.source.sample_rate_hz={configured} but the data say {float(declared):g} Hz")
+    rate = configured if configured is not None else declared
+    return None if rate is None else float(rate)
 
 
 def _npz_array(archive, key, path) -> np.ndarray:
@@ -77,7 +107,19 @@ def _check_force_levels(force, n, path) -> np.ndarray:
     return force
 
 
-def load_npz(path, label="y", sample_rate_hz=250.0) -> RecordingSet:
+def _npz_split(split, n, path) -> np.ndarray:
+    if split.ndim != 1 or len(split) != n:
+        raise InputError(f"{path}: split has {split.size} values for {n} recordings; expected shape ({n},)")
+    return split_values(split, f"{path}: array 'split'", lambda k: f"split[{k}]")
+
+
+def _npz_sample_rate(rate, path) -> float:
+    if rate.size != 1 or not np.issubdtype(rate.dtype, np.number):
+        raise InputError(f"{path}: sample_rate_hz must be one number (hertz), got shape {rate.shape} dtype {rate.dtype}")
+    return float(rate.reshape(()))
+
+
+def load_npz(path, label="y", sample_rate_hz=None) -> RecordingSet:
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such file")
@@ -97,8 +139,8 @@ def load_npz(path, label="y", sample_rate_hz=250.0) -> RecordingSet:
             if key not in archive:
                 raise InputError(f"{path}: missing array '{key}'; found {', '.join(archive.files)}")
         X, y = _npz_array(archive, "X", path), _npz_array(archive, "y", path)
-        force = _npz_array(archive, "force_level", path) if "force_level" in archive else None
-        names = _npz_array(archive, "channel_names", path) if "channel_names" in archive else None
+        optional = {key: _npz_array(archive, key, path) for key in ("force_level", "channel_names", "split",
+                                                                     "sample_rate_hz") if key in archive}
     if X.ndim != 3:
         raise InputError(f"{path}: X must be (n, channels, length), got shape {X.shape}")
     if not np.issubdtype(X.dtype, np.number):
@@ -106,17 +148,32 @@ def load_npz(path, label="y", sample_rate_hz=250.0) -> RecordingSet:
     _check_labels(y, len(X), path)
     if not np.isfinite(X).all():
         raise InputError(f"{path}: X contains NaN or inf")
+    names = optional.get("channel_names")
     names = [str(c) for c in names] if names is not None else [f"channel_{k}" for k in range(X.shape[1])]
     if len(names) != X.shape[1]:
         raise InputError(f"{path}: channel_names has {len(names)} names for {X.shape[1]} channels")
     labels = pd.DataFrame({label: y})
-    if force is not None:
-        labels["force_level_n"] = _check_force_levels(force, len(X), path)
-    return RecordingSet(X.astype(np.float32), names, labels, sample_rate_hz, {"source": "npz", "path": str(path)})
+    if "force_level" in optional:
+        labels["force_level_n"] = _check_force_levels(optional["force_level"], len(X), path)
+    if "split" in optional:
+        labels["split"] = _npz_split(optional["split"], len(X), path)
+    declared = _npz_sample_rate(optional["sample_rate_hz"], path) if "sample_rate_hz" in optional else None
+    return RecordingSet(X.astype(np.float32), names, labels, _sample_rate(sample_rate_hz, declared, path),
+                        {"source": "npz", "path": str(path)})
+
+
+def _median_step_rate(frame, recording_column, time_column, path) -> float:
+    """One over the median time step within recordings (seconds, as the time column's `_s` says)."""
+    steps = frame.groupby(recording_column, sort=False)[time_column].diff().dropna().to_numpy(dtype=np.float64)
+    step_s = float(np.median(steps)) if steps.size else float("nan")
+    if not step_s > 0:
+        raise InputError(f"{path}: time column '{time_column}' gives no positive time step (repeated time stamps?); "
+                         "set data.source.sample_rate_hz")
+    return 1.0 / step_s
 
 
 def load_long_table(path, recording_column, time_column, channel_columns, label_columns,
-                    force_column=None, sample_rate_hz=250.0) -> RecordingSet:
+                    force_column=None, sample_rate_hz=None, split_column="split", lengths="equal") -> RecordingSet:
     """One recording per id, channels in the given order, labels from its first row."""
     frame = read_table_file(path)
     check_numeric_columns(frame, [time_column] + list(channel_columns), "channel/time", str(path))
@@ -124,22 +181,32 @@ def load_long_table(path, recording_column, time_column, channel_columns, label_
     missing = [c for c in needed if c not in frame.columns]
     if missing:
         raise InputError(f"{path}: missing column(s) {', '.join(missing)}; found {', '.join(map(str, frame.columns))}")
+    has_split = bool(split_column) and split_column in frame.columns
+    if has_split:  # every row's value checked, and one value per recording: a recording is one sample
+        values = split_values(frame[split_column].to_numpy(), f"{path}: column '{split_column}'",
+                              lambda row: where(path, row))
+        check_one_split_per_group(values, frame[recording_column].to_numpy(), f"{path}", "recording")
+        frame = frame.assign(**{split_column: values})
+    frame = frame.sort_values([recording_column, time_column], kind="stable")
     arrays, rows = [], []
-    for recording, part in frame.sort_values([recording_column, time_column]).groupby(recording_column, sort=True):
+    for recording, part in frame.groupby(recording_column, sort=True):
         arrays.append(part[list(channel_columns)].to_numpy(dtype=np.float64).T)
         first = part.iloc[0]
         row = {c: first[c] for c in label_columns}
         if force_column:
             row["force_level_n"] = float(first[force_column])  # the data module splits on this name
+        if has_split:
+            row["split"] = first[split_column]
         rows.append(row)
-    return RecordingSet(_stack(arrays, path), list(channel_columns), pd.DataFrame(rows), sample_rate_hz,
+    rate = _sample_rate(sample_rate_hz, _median_step_rate(frame, recording_column, time_column, path), path)
+    return RecordingSet(_stack(arrays, path, lengths), list(channel_columns), pd.DataFrame(rows), rate,
                         {"source": "table", "path": str(path)})
 
 
 class NpzRecordings:
     """`data=recordings_npz data.source.path=rig.npz`: a user's NPZ as a recordings source."""
 
-    def __init__(self, path, label="y", sample_rate_hz=250.0):
+    def __init__(self, path, label="y", sample_rate_hz=None):
         self.path, self.label, self.sample_rate_hz = path, label, sample_rate_hz
 
     def load(self) -> RecordingSet:
@@ -150,11 +217,13 @@ class LongTableRecordings:
     """`data=recordings_table data.source.path=rig.parquet`: a user's long table as a recordings source."""
 
     def __init__(self, path, recording_column, time_column, channel_columns, label_columns,
-                 force_column=None, sample_rate_hz=250.0):
+                 force_column=None, sample_rate_hz=None, split_column="split", lengths="equal"):
         self.path, self.recording_column, self.time_column = path, recording_column, time_column
         self.channel_columns, self.label_columns = list(channel_columns), list(label_columns)
         self.force_column, self.sample_rate_hz = force_column, sample_rate_hz
+        self.split_column, self.lengths = split_column, lengths
 
     def load(self) -> RecordingSet:
         return load_long_table(self.path, self.recording_column, self.time_column, self.channel_columns,
-                               self.label_columns, self.force_column, self.sample_rate_hz)
+                               self.label_columns, self.force_column, self.sample_rate_hz, self.split_column,
+                               self.lengths)

@@ -1,7 +1,9 @@
 """Sets of time-series recordings: what the fingertip scene simulates and a rig records.
 
 One recording per pass: `signals` of shape (n_recordings, n_channels, n_timesteps), channel
-names with units, a label table (one row per recording) and the sample rate.
+names with units, a label table (one row per recording) and the sample rate (None when the data
+do not say). The label table may carry a `split` column (train / val / test per recording): the
+side a data set declares, used by `data.split=predefined`.
 """
 from dataclasses import dataclass, field
 
@@ -14,7 +16,7 @@ class RecordingSet:
     signals: np.ndarray
     channel_names: list[str]
     labels: pd.DataFrame
-    sample_rate_hz: float
+    sample_rate_hz: float | None
     description: dict = field(default_factory=dict)
 
     def __len__(self) -> int:
@@ -22,6 +24,8 @@ class RecordingSet:
 
     @property
     def time_s(self) -> np.ndarray:
+        if self.sample_rate_hz is None:
+            raise ValueError("these recordings declare no sample rate, so they have no time axis")
         return np.arange(self.signals.shape[-1]) / self.sample_rate_hz
 
     def channel(self, name: str) -> np.ndarray:

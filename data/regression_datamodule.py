@@ -4,7 +4,9 @@
 
 A held-out test split (15 % by default) is never touched in training or selection; an
 optional calibration split (for conformal intervals) and a validation split come out of the
-rest.
+rest. With `split=predefined` the table's own split column says which rows are train / val /
+test; calibration and (when no val rows are declared) validation are carved from the train rows,
+grouped (data/splits.py: predefined_split).
 Features are standardised with statistics from the training split only. Targets stay in
 physical units here: a net standardises its own targets inside `fit` and reports back in
 units, so every model sees and returns the same arrays.
@@ -14,7 +16,7 @@ from sklearn.preprocessing import StandardScaler
 
 from data.features import compute_features, feature_names
 from data.split_settings import check_split_settings
-from data.splits import SPLIT_NOTES, holdout
+from data.splits import SPLIT_NOTES, holdout, predefined_split
 from data.errors import InputError
 from data.tables import SensorTable, TableSource
 
@@ -32,7 +34,8 @@ class RegressionDataModule:
         self.seed = seed
 
     def setup(self) -> "RegressionDataModule":
-        check_split_settings(self.n_folds, self.test_fraction, self.val_fraction, self.calibration_fraction)
+        check_split_settings(self.n_folds, self.test_fraction, self.val_fraction, self.calibration_fraction,
+                             self.split)
         table = self.source.load()
         if not isinstance(table, SensorTable):
             name = getattr(self.source, "name", type(self.source).__name__)
@@ -46,6 +49,24 @@ class RegressionDataModule:
         self.feature_names = feature_names(self.channel_names, self.features)
         self.y = table.targets
 
+        if self.split == "predefined":
+            self._predefined_split(table)
+        else:
+            self._drawn_split(table)
+        self.X, self.scaler = self.features_for(self.features)
+        return self
+
+    def _predefined_split(self, table: SensorTable) -> None:
+        """The table's declared sides; calibration is carved from its train rows, grouped."""
+        where = table.description.get("path", table.description.get("scene", "the table"))
+        train, self.val_idx, self.test_idx = predefined_split(table.split, self.val_fraction, self.seed + 1,
+                                                              str(where), groups=table.groups)
+        self.cal_idx = np.array([], dtype=np.int64)
+        if self.calibration_fraction > 0:
+            train, self.cal_idx = holdout(train, table.groups, self.calibration_fraction, "grouped", self.seed + 2)
+        self.train_idx = train
+
+    def _drawn_split(self, table: SensorTable) -> None:
         everything = np.arange(len(self.y))
         rest, self.test_idx = holdout(everything, table.groups, self.test_fraction, self.split, self.seed)
         # Calibration and validation are fractions of the whole set, taken from what is left.
@@ -55,8 +76,6 @@ class RegressionDataModule:
             rest, self.cal_idx = holdout(rest, table.groups, self.calibration_fraction / left, self.split, self.seed + 2)
             left -= self.calibration_fraction
         self.train_idx, self.val_idx = holdout(rest, table.groups, self.val_fraction / left, self.split, self.seed + 1)
-        self.X, self.scaler = self.features_for(self.features)
-        return self
 
     def features_for(self, groups):
         """Scaled features of every row for a choice of feature groups (used by the ablation):
@@ -92,7 +111,8 @@ class RegressionDataModule:
                 "source": self.table.description}
 
 
-def from_table(path, channel_columns, target_columns, group_columns=None, **datamodule_options):
+def from_table(path, channel_columns, target_columns, group_columns=None, split_column="split",
+               **datamodule_options):
     """`data=table`: a user's CSV/Parquet recording served by the same datamodule as a scene."""
-    source = TableSource(path, channel_columns, target_columns, group_columns)
+    source = TableSource(path, channel_columns, target_columns, group_columns, split_column)
     return RegressionDataModule(source, **datamodule_options)

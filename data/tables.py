@@ -2,7 +2,9 @@
 
 A SensorTable holds one row per press: channel columns (inputs), target columns (what to
 learn, units in their names) and a group id per row (all repeats of one position-depth
-pair share a group, so grouped splits can keep them on one side). When the channels were
+pair share a group, so grouped splits can keep them on one side). An optional `split` gives
+each row the side its source declares (train / val / test) for `data.split=predefined`: a user's
+file with a split column, or a scene that models a published protocol. When the channels were
 normalised from raw readings (scene rubber12_lab's min-max step), `normalisation` keeps how,
 so a model trained on them can be deployed on the raw readings.
 """
@@ -12,7 +14,8 @@ import pandas as pd
 
 from data.errors import InputError
 from data.minmax_scaling import MinMaxScaling
-from data.table_files import check_numeric_columns, read_table_file
+from data.splits import split_values
+from data.table_files import check_numeric_columns, read_table_file, where
 
 
 @dataclass
@@ -23,6 +26,11 @@ class SensorTable:
     groups: np.ndarray
     description: dict = field(default_factory=dict)
     normalisation: MinMaxScaling | None = None  # raw readings -> channel_columns; None: channels are raw
+    split: np.ndarray | None = None  # one of train / val / test per row, or None: the source declares none
+
+    def __post_init__(self):
+        if self.split is not None and len(self.split) != len(self.frame):
+            raise InputError(f"a split label per row is needed: {len(self.split)} labels for {len(self.frame)} rows")
 
     @property
     def channels(self) -> np.ndarray:
@@ -34,14 +42,17 @@ class SensorTable:
 
 
 class TableSource:
-    """A user's recording: `data=table data.source.path=rig.csv`, columns named in the config."""
+    """A user's recording: `data=table data.source.path=rig.csv`, columns named in the config.
+    A `split_column` present in the file is kept as the rows' declared split (data.split=predefined
+    uses it); absent, the table declares none."""
 
     def __init__(self, path: str, channel_columns: list[str], target_columns: list[str],
-                 group_columns: list[str] | None = None):
+                 group_columns: list[str] | None = None, split_column: str | None = "split"):
         self.path = path
         self.channel_columns = list(channel_columns)
         self.target_columns = list(target_columns)
         self.group_columns = list(group_columns) if group_columns else None
+        self.split_column = split_column
 
     def load(self) -> SensorTable:
         frame = read_table_file(self.path)
@@ -56,5 +67,9 @@ class TableSource:
             groups = frame.groupby(self.group_columns, sort=True, dropna=False).ngroup().to_numpy()
         else:
             groups = np.arange(len(frame))
+        split = None
+        if self.split_column and self.split_column in frame.columns:
+            split = split_values(frame[self.split_column].to_numpy(), f"{self.path}: column '{self.split_column}'",
+                                 lambda row: where(self.path, row))
         return SensorTable(numeric, self.channel_columns, self.target_columns, groups,
-                           {"source": "table", "path": str(self.path)})
+                           {"source": "table", "path": str(self.path)}, split=split)

@@ -1,16 +1,21 @@
 """The time-series datamodule: recordings -> calibrated channels -> windows -> splits -> scaling.
 
-Serves the surface-recognition models (PR-CNN and its baselines) the way the seed paper
-trains them:
+Serves the surface-recognition models (PR-CNN and its baselines). Every preprocessing step is
+an explicit option, neutral in the configs of a user's recordings (configs/data/base/timeseries.yaml)
+and set to the seed paper's values by the fingertip's (configs/data/fingertip.yaml):
 - recordings come from a scene (fingertip) or a user's NPZ / long table;
 - `force_calibration` turns the piezoresistive divider voltage into newtons (Algorithm 1
-  compares the channel's maximum with force levels in newtons);
-- recordings are decimated, trimmed and cut into windows (data/windows.py);
+  compares the channel's maximum with force levels in newtons); null: channels as recorded;
+- recordings are decimated (`decimate`, 1: none), trimmed (`trim_start`/`trim_end`, 0: none)
+  and cut into windows (data/windows.py); `window_length: null` takes each recording whole;
 - `split=force_level` trains on the recorded levels (paper: 1, 10, 15, 25 N); the recordings at
   levels never used in training (5, 20 N) are divided by recording into validation (to choose
   with) and test (to report on), `test_fraction` of them to test. `split=stratified` holds out
   `test_fraction` of all recordings for test, then `val_fraction` of the rest for validation,
-  stratified by label. Windows of one recording always stay on one side;
+  stratified by label. `split=predefined` takes the recordings' own train / val / test labels (an
+  NPZ's `split` array, a table's split column), carving validation from the train recordings
+  (stratified by label) when none are declared (data/splits.py). Windows of one recording always
+  stay on one side;
 - `modalities` name groups of channels (names or indices), e.g. triboelectric: [0];
   any number of groups and channels per group, so an IMU's accelerometer + gyroscope fit too;
 - `augment` with `enabled: true` adds virtual force-level windows (Algorithm 1) to training;
@@ -23,13 +28,25 @@ from sklearn.model_selection import ShuffleSplit, StratifiedShuffleSplit
 from data.errors import InputError
 from data.physics.force_sensing_resistor import calibrated_channel_name, fsr_force_n
 from data.recordings import RecordingSet
+from data.splits import SPLIT_NOTES, predefined_split
 from data.virtual_force_levels import virtual_force_levels
 from data.windows import cut_windows, decimate
+
+
+SPLITS = ("force_level", "stratified", "predefined")
 
 
 def _check_fraction(name, value) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < 1.0:
         raise InputError(f"data.{name} must be a number in (0, 1), got {value!r}")
+
+
+def _check_steps(name, value, may_be_null=False) -> None:
+    if value is None and may_be_null:
+        return
+    if isinstance(value, bool) or not isinstance(value, int) or value < 1:
+        raise InputError(f"data.{name} must be a whole number of steps >= 1{' or null' if may_be_null else ''}, "
+                         f"got {value!r}")
 
 
 class TimeSeriesDataModule:
@@ -60,13 +77,20 @@ class TimeSeriesDataModule:
 
     # -- steps ------------------------------------------------------------------------------
     def _load(self) -> RecordingSet:
+        _check_steps("decimate", self.decimate)
+        _check_steps("window_length", self.window_length, may_be_null=True)
+        _check_steps("window_step", self.window_step, may_be_null=True)
         recordings = self.source.load()
         if not isinstance(recordings, RecordingSet):
             raise InputError("data=timeseries needs a scene or file of time-series recordings (e.g. scene=fingertip)")
+        if self.label == "split":
+            raise InputError("data.label 'split' names the declared train / val / test sides, not a class label")
         # A few raw windows as recorded (before calibration and decimation): what a deployed
         # model receives, kept for latency measurements of the exported pipeline.
-        start, steps = self.trim_start * self.decimate, self.window_length * self.decimate
-        self.raw_examples = recordings.signals[:256, :, start:start + steps].copy()
+        start = self.trim_start * self.decimate
+        length = (self.window_length * self.decimate if self.window_length is not None
+                  else (recordings.signals.shape[-1] // self.decimate - self.trim_start - self.trim_end) * self.decimate)
+        self.raw_examples = recordings.signals[:256, :, start:start + max(length, 0)].copy()
         if self.label not in recordings.labels:
             raise InputError(f"data.label '{self.label}' is not a label of these recordings; "
                              f"available: {', '.join(recordings.labels.columns)}")
@@ -120,7 +144,8 @@ class TimeSeriesDataModule:
 
     def _split_recordings(self, labels):
         """(train, validation, test) recording indices; every window follows its recording."""
-        _check_fraction("test_fraction", self.test_fraction)
+        if self.split in ("force_level", "stratified"):  # predefined: the data say which are test
+            _check_fraction("test_fraction", self.test_fraction)
         if self.split == "force_level":
             if "force_level_n" not in labels:
                 raise InputError("data.split=force_level needs a force level per recording")
@@ -148,13 +173,24 @@ class TimeSeriesDataModule:
                 raise InputError(f"data.split=stratified: {error}") from None
             self.test_stratified_by = [self.label]
             return np.sort(rest[train]), np.sort(rest[val]), np.sort(test)
-        raise InputError(f"data.split must be force_level or stratified, got '{self.split}'")
+        if self.split == "predefined":
+            # Each recording is its own group, so validation is carved by recording, stratified by label.
+            where = self.recordings_description.get("path", self.recordings_description.get("scene", "the recordings"))
+            declared = labels["split"].to_numpy() if "split" in labels else None
+            self.test_stratified_by = None  # declared by the data, not drawn here
+            return predefined_split(declared, self.val_fraction, self.seed, str(where),
+                                    strata=labels[self.label].astype(str).to_numpy())
+        raise InputError(f"data.split must be one of {', '.join(SPLITS)}, got '{self.split}'")
 
     def setup(self) -> "TimeSeriesDataModule":
         recordings = self._load()
+        self.recordings_description = dict(recordings.description)
         names = list(recordings.channel_names)
         signals = decimate(recordings.signals, int(self.decimate))
-        self.sample_rate_hz = recordings.sample_rate_hz / int(self.decimate)
+        # The rate the recordings were made at (what a deployed model receives) and the rate the
+        # networks see after decimation; None when the data do not say.
+        self.recording_rate_hz = recordings.sample_rate_hz
+        self.sample_rate_hz = None if recordings.sample_rate_hz is None else recordings.sample_rate_hz / int(self.decimate)
         labels = recordings.labels
         self.classes = sorted(labels[self.label].astype(str).unique())
         codes = labels[self.label].astype(str).map({c: i for i, c in enumerate(self.classes)}).to_numpy()
@@ -197,6 +233,9 @@ class TimeSeriesDataModule:
         self.y_train, self.y_val, self.y_test = y_train.astype(np.int64), y_val.astype(np.int64), y_test.astype(np.int64)
         self.channel_names = names
         groups = self.modalities or {name: [name] for name in names}
+        if not isinstance(groups, dict) or not all(isinstance(c, (list, tuple)) and len(c) for c in groups.values()):
+            raise InputError("data.modalities must map each group name to a non-empty list of channels (names or "
+                             f"indices), e.g. {{accel: [0, 1, 2], gyro: [3, 4, 5]}}; got {groups!r}")
         self.modality_channels = {g: [self._channel_index(c, names) for c in chs] for g, chs in groups.items()}
         used = [c for chs in self.modality_channels.values() for c in chs]
         if len(set(used)) != len(used):
@@ -219,14 +258,19 @@ class TimeSeriesDataModule:
 
     def summary(self) -> dict:
         return {"task": self.task, "label": self.label, "classes": self.classes, "split": self.split,
+                "split_note": SPLIT_NOTES.get(self.split, ""),
                 "train_levels": list(self.train_levels) if self.split == "force_level" else None,
                 "val_levels": list(self.val_levels) if self.split == "force_level" else None,
                 "n_train_windows": int(len(self.y_train)), "n_virtual_windows": int(self.n_virtual_windows),
                 "n_val_windows": int(len(self.y_val)), "n_test_windows": int(len(self.y_test)),
                 "n_train_recordings": int(len(self.train_recordings)),
                 "n_val_recordings": int(len(self.val_recordings)), "n_test_recordings": int(len(self.test_recordings)),
-                "test_fraction": self.test_fraction, "test_stratified_by": self.test_stratified_by,
+                "test_fraction": None if self.split == "predefined" else self.test_fraction,
+                "test_stratified_by": self.test_stratified_by,
                 "window": [int(self.X_train.shape[1]), int(self.X_train.shape[2])],
-                "sample_rate_hz": self.sample_rate_hz, "channels": self.channel_names,
+                "sample_rate_hz": self.sample_rate_hz, "recording_rate_hz": self.recording_rate_hz,
+                "decimate": int(self.decimate), "trim": [int(self.trim_start), int(self.trim_end)],
+                "window_length": self.window_length, "force_calibration": bool(self.force_calibration),
+                "channels": self.channel_names,
                 "modalities": self.modality_channels, "augment": self.augment_report,
                 "source": self.recordings.description}

@@ -5,7 +5,9 @@ a boxcar low-pass, so 50 Hz hum does not alias in), trimmed at both ends (the id
 "redundant" points before the approach and after the separation), and cut into windows of
 `length` steps every `step` steps. Windows whose variance on `variance_channel` is below
 `min_variance` are dropped (flat stretches carry no texture). Paper: no decimation,
-length 1400 at 250 Hz, step 10.
+length 1400 at 250 Hz, step 10. A `length` of None takes each (trimmed) recording whole, as
+one window: what a data set of fixed-length series (one label per series) is classified by.
+A `step` of None puts windows back to back (step = length).
 """
 import numpy as np
 
@@ -32,15 +34,23 @@ def window_starts(n_steps: int, length: int, step: int) -> np.ndarray:
     return np.arange(0, n_steps - length + 1, step)
 
 
-def cut_windows(signals: np.ndarray, length: int, step: int, trim_start: int = 0, trim_end: int = 0,
+def cut_windows(signals: np.ndarray, length: int | None, step: int | None, trim_start: int = 0, trim_end: int = 0,
                 min_variance: float = 0.0, variance_channel: int = 0):
     """(n_recordings, channels, steps) -> windows (n_windows, channels, length) and, per window,
     the index of its recording. Raises a one-line error when no window survives."""
     signals = np.asarray(signals)
     if signals.ndim != 3:
         raise InputError(f"recordings must be (n_recordings, channels, steps), got shape {signals.shape}")
+    for name, value in (("trim_start", trim_start), ("trim_end", trim_end)):
+        if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 0:
+            raise InputError(f"data.{name} must be a whole number of steps >= 0, got {value!r}")
     end = signals.shape[-1] - trim_end
     trimmed = signals[..., trim_start:end]
+    if trimmed.shape[-1] < 1:
+        raise InputError(f"recordings of {signals.shape[-1]} steps leave no step after trimming "
+                         f"{trim_start} + {trim_end}")
+    length = trimmed.shape[-1] if length is None else length
+    step = length if step is None else step
     starts = window_starts(trimmed.shape[-1], length, step)
     if starts.size == 0:
         raise InputError(f"recordings of {trimmed.shape[-1]} steps after trimming are shorter than the "

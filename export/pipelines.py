@@ -129,7 +129,9 @@ def metadata_for(pipeline, config_hash: str, opset: int) -> dict[str, str]:
                 "outputs": json.dumps(["prediction"] + (["interval_half_width"] if hasattr(pipeline.model, "conformal_scale_") else []))}
     return {**common, "kind": "classification", "input": "window", "classes": json.dumps(pipeline.classes),
             "window_steps": str(pipeline.raw_length), "decimate": str(pipeline.decimate),
-            "sample_rate_hz": str(pipeline.description.get("sample_rate_hz", "")), "outputs": json.dumps(["probabilities"])}
+            # the rate of the raw windows the graph takes, as the data declared it; unknown when they did not
+            "sample_rate_hz": str(pipeline.description.get("sample_rate_hz") or "unknown"),
+            "outputs": json.dumps(["probabilities"])}
 
 
 def export_pipeline(pipeline, opset: int = 18, config_text: str = "") -> onnx.ModelProto:

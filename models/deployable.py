@@ -102,7 +102,7 @@ def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:
     return TimeSeriesPipeline(raw_names, list(datamodule.classes), calibration, int(datamodule.decimate),
                               int(datamodule.X_train.shape[-1]), datamodule.channel_mean.reshape(1, -1, 1),
                               datamodule.channel_std.reshape(1, -1, 1), model,
-                              {"label": datamodule.label, "sample_rate_hz": datamodule.sample_rate_hz * datamodule.decimate},
+                              {"label": datamodule.label, "sample_rate_hz": datamodule.recording_rate_hz},
                               datamodule.raw_examples)
 
 

@@ -70,7 +70,7 @@ def test_the_checker_catches_a_violation(tmp_path, monkeypatch):
 # Options that only make sense in a time-series run compose inside one (experiment=materials10
 # sets the fingertip scene, the time-series data, PR-CNN and the time-series trainer).
 TIME_SERIES = {"model": {"prcnn", "rescnn", "inceptiontime", "lstm_fcn", "base/timeseries_classifier"},
-               "data": {"timeseries", "recordings_npz", "recordings_table"},
+               "data": {"timeseries", "fingertip", "base/timeseries", "recordings_npz", "recordings_table"},
                "scene": {"fingertip", "fingertip_minimal", "base/fingertip"},
                "trainer": {"tsc"}, "augment": {"virtual_force_levels"}, "size": {"paper"},
                "variant": {"prcnn_w16", "prcnn_w64", "prcnn_short_window", "rescnn", "inceptiontime", "lstm_fcn"}}

@@ -1,6 +1,6 @@
 """The report of a classification run: confusion matrices for validation and test (PNG and
-TensorBoard), final scalars and hyper-parameters, predictions.csv, pipeline.pkl, metrics.json and
-the log line. Validation is what runs are chosen on; test, never used for choosing, is reported
+TensorBoard), final scalars and hyper-parameters, predictions.csv (with class probabilities),
+pipeline.pkl, metrics.json and the log line. Validation is what runs are chosen on; test, never used for choosing, is reported
 beside it so the number a reader quotes is an honest one."""
 import logging
 from pathlib import Path
@@ -19,10 +19,14 @@ FIGURE_FILES = {"val": "confusion.png", "test": "confusion_test.png"}  # confusi
 
 
 def _split_frame(classes, split, recording, y_true, proba, levels) -> pd.DataFrame:
+    """One row per window: its recording, true and predicted class names and one probability
+    column per class (`p_<class>`), so a user can rank, threshold or calibrate without re-running."""
     frame = pd.DataFrame({"split": split, "recording": recording, "true": classes[y_true],
                           "predicted": classes[proba.argmax(axis=1)]})
     if levels is not None:
         frame["force_level_n"] = levels
+    for k, name in enumerate(classes):
+        frame[f"p_{name}"] = proba[:, k]
     return frame
 
 

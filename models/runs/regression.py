@@ -104,7 +104,7 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
     (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     targets = datamodule.target_names
     model = instantiate(cfg.model)
-    groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split == "grouped" else None
+    groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split in ("grouped", "predefined") else None
 
     start, cpu_start = time.perf_counter(), time.process_time()
     model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
