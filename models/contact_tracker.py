@@ -57,6 +57,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from sklearn.base import BaseEstimator
 
+from data.contact_windows import window_indices
 from data.errors import InputError
 from models.otsu_threshold import otsu_threshold
 from models.paper_contact_tracking import paper_track_clusters
@@ -64,7 +65,7 @@ from models.paper_contact_tracking import paper_track_clusters
 THRESHOLDS = ("std", "variance")
 SEGMENTATIONS = ("ours", "paper")
 TRACKINGS = ("global", "paper")
-FORCE_FEATURES = ("peak", "sum", "mean")
+FORCE_FEATURES = ("peak", "sum", "mean", "window")
 HISTORY_FRAMES = 10  # centroids kept per track for the velocity a merge remembers (1/6 s at 60 frames/s)
 MAX, MIN, ALL, ANY = np.maximum.reduce, np.minimum.reduce, np.logical_and.reduce, np.logical_or.reduce
 
@@ -137,9 +138,11 @@ class ContactTracker(BaseEstimator):
       before retirement; hold_sensitivity: c for cells next to a live contact (hysteresis
       thresholding, Canny 1986: a contact once found is followed down to a lower threshold, so a
       light touch near the detection limit does not flicker; new contacts still need
-      `sensitivity`); None: one threshold, as the paper; force_model: callable(load array) -> force_n, or a fitted regressor
-      (predict on one column); force_feature: which load the force model reads ("peak": the
-      largest cell, as the characterisation presses at a cell centre); follow_drift: every
+      `sensitivity`); None: one threshold, as the paper; force_model: callable(features) -> force_n, or a fitted
+      regressor (predict), features one row per contact; force_feature: what the force model
+      reads ("peak": the largest cell, as the characterisation presses at a cell centre; "sum",
+      "mean"; "window": the 3 x 3 loads around the peak, the scene's `characterisation_channels:
+      window` rows, so a model fitted on those presses by the regression pipeline serves); follow_drift: every
       frame, move the rest mean of each cell below threshold towards its reading by drift_rate
       (an exponential average; cells under a contact keep their mean); saddle_ratio: with
       connectivity 8, two diagonal peak cells are one contact when the larger of the two cells
@@ -236,7 +239,7 @@ class ContactTracker(BaseEstimator):
         # per cell, its 4 diagonal neighbours (window positions 0, 2, 6, 8) and the two cells each
         # diagonal step passes between (the shared row and column neighbours); padding outside
         diagonal, side = [0, 2, 6, 8], [(1, 3), (1, 5), (3, 7), (5, 7)]
-        padded = np.where(inside, self.neighbourhood_, self.n_cells_)
+        padded = window_indices(rows, cols)  # the force window too (data/contact_windows.py)
         self.diagonal_ = padded[:, diagonal]
         self.saddle_cells_ = np.stack([padded[:, [a for a, _ in side]], padded[:, [b for _, b in side]]])
         # (cell, window position, x|y): position 4 is the cell itself
@@ -456,6 +459,7 @@ class ContactTracker(BaseEstimator):
         above_load = self.above_load_
         np.multiply(load, above, out=above_load[:-1])
         weight = above_load[window]
+        allowed = None
         if n > 1:  # another contact's cells in the window do not count
             owner = labels[window]
             allowed = owner == 0
@@ -479,15 +483,23 @@ class ContactTracker(BaseEstimator):
         id_of = self.id_of_  # contact number -> id (0 -> 0: background)
         id_of[1:n + 1] = ids
         id_image = id_of[labels[:-1]].reshape(self.rows, self.cols)
+        force = self.no_force_[:n] if self.force_model is None else self._force(peak, mean_load, total, load, window, allowed)
         return FrameContacts(self.frame_index_, ids, x_mm, y_mm, n_cells, n_cells * self.pitch_mm ** 2, mean_load,
-                             peak, self._force(peak, mean_load, total), id_image)
+                             peak, force, id_image)
 
-    def _force(self, peak, mean_load, total) -> np.ndarray:
-        if self.force_model is None:
-            return self.no_force_[:len(peak)]
-        feature = {"peak": peak, "sum": total, "mean": mean_load}[self.force_feature]
+    def _force(self, peak, mean_load, total, load, window, allowed) -> np.ndarray:
+        """Force per contact from the force model. "window": the load of the 3 x 3 cells around
+        the contact's peak as the characterisation presses give it (data/contact_windows.py: not
+        thresholded, 0 outside the grid and on another contact's cells), one row per contact;
+        the others: one number per contact."""
+        if self.force_feature == "window":
+            feature = np.append(load, 0.0)[window]
+            if allowed is not None:
+                feature *= allowed
+        else:
+            feature = {"peak": peak, "sum": total, "mean": mean_load}[self.force_feature].reshape(-1, 1)
         if hasattr(self.force_model, "predict"):
-            return np.asarray(self.force_model.predict(feature.reshape(-1, 1)), dtype=np.float64).reshape(-1)
+            return np.asarray(self.force_model.predict(feature), dtype=np.float64).reshape(-1)
         return np.asarray(self.force_model(feature), dtype=np.float64).reshape(-1)
 
     # ----------------------------------------------------------------------------- tracking (ours)

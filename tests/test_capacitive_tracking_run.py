@@ -14,7 +14,7 @@ from models.runs.capacitive_tracking import load_stream
 from models.runs.run import run
 
 TINY = ["experiment=capacitive_tracking", "scene.sessions=[hold,cross]", "scene.session_s=1.0", "scene.gap_s=0.2",
-        "scene.n_rest_frames=30", "study.force_repetitions=1", "study.animation.max_frames=4",
+        "scene.n_rest_frames=30", "study.force_repetitions=3", "study.animation.max_frames=4",
         "study.animation.n_panels=2"]
 
 
@@ -30,7 +30,8 @@ def test_simulated_stream_is_tracked_evaluated_and_animated(compose_config, tmp_
         assert 0.0 <= overall["f1"] <= 1.0 and overall["id_switches"] >= 0
         assert set(written["trackers"][name]["by_scenario"]) >= {"hold", "cross"}
     assert metrics["trackers"]["ours"]["overall"]["tp"] > 0
-    assert written["trackers"]["ours"]["force_model"]["counts_per_n"] > 0
+    force_model = written["force_model"]     # the pipeline's model, fitted on windows of the presses
+    assert force_model["model"] == "ClassicRegressor" and force_model["test"]["force_n"]["r2"] > 0.95
     contacts = pd.read_csv(tmp_path / "contacts.csv")
     assert list(contacts.columns) == ["frame", "id", "x_mm", "y_mm", "cells", "mean_load", "peak_load", "force_n"]
     assert contacts.frame.min() >= 30 and contacts.force_n.notna().all()
@@ -68,3 +69,22 @@ def test_bad_recordings_are_one_line_errors_and_write_nothing(compose_config, tm
     cause = error.value.__cause__
     assert isinstance(cause, InputError) and words in str(cause) and "\n" not in str(cause)
     assert not out.exists() or not any(out.iterdir())
+
+
+def test_a_saved_window_force_model_serves_the_tracker(compose_config, tmp_path):
+    """A capacitive_force run on window channels saves a pipeline the tracker reads force with;
+    a pipeline of another sensor's channels is a one-line error."""
+    force_run = tmp_path / "force"
+    run(compose_config(["experiment=capacitive_force", "hydra.mode=RUN", "model=linear_regression",
+                        "scene.characterisation_channels=window", "scene.n_repetitions=3", "export=none",
+                        "extras=quick"]), force_run)
+    out = tmp_path / "track"
+    metrics = run(compose_config(TINY + [f"study.force_model={force_run}"]), out)
+    assert metrics["force_model"]["loaded_from"].endswith("pipeline.pkl")
+    contacts = pd.read_csv(out / "contacts.csv")
+    assert contacts.force_n.notna().all() and contacts.force_n.between(-0.5, 5.0).all()
+    cells_run = tmp_path / "cells"
+    run(compose_config(["experiment=capacitive_force", "hydra.mode=RUN", "model=linear_regression",
+                        "scene.n_repetitions=3", "export=none", "extras=quick"]), cells_run)
+    with pytest.raises(InstantiationException, match="3x3 window"):
+        run(compose_config(TINY + [f"study.force_model={cells_run}"]), tmp_path / "bad")

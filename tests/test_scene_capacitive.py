@@ -14,6 +14,7 @@ from omegaconf import OmegaConf
 import data.scenes.capacitive6x6 as capacitive
 from data.contact_sessions import SESSIONS
 from data.contact_streams import TRUTH_COLUMNS, ContactStream, load_frames, save_frames_csv
+from data.contact_windows import window_channel_names, window_indices, windows_around_peaks
 from data.errors import InputError
 from data.scenes.capacitive6x6 import Capacitive6x6Scene, channel_names
 from data.scenes.capacitive6x6_effects import EFFECTS, FULL_SCALE_COUNTS
@@ -350,3 +351,28 @@ def test_train_cli_refuses_an_impossible_scene_in_one_line_and_writes_nothing(tm
     lines = result.stderr.strip().splitlines()
     assert len(lines) == 1 and "cover_thickness_mm must be a positive number" in lines[0]
     assert not (out / "metrics.json").exists() and not (out / "model.onnx").exists()
+
+
+def test_window_characterisation_reads_the_cells_around_each_press_as_the_tracker_does():
+    cells = scene(n_repetitions=2).generate()
+    window = scene(n_repetitions=2, characterisation_channels="window").generate()
+    assert window.channel_columns == window_channel_names() and window.target_columns == ["force_n"]
+    assert np.array_equal(window.channels[:, 4], cells.channels.max(axis=1))        # the centre: the largest cell
+    np.testing.assert_array_equal(window.channels, windows_around_peaks(cells.channels, 6, 6))
+    with pytest.raises(InputError, match="characterisation_channels"):
+        scene(characterisation_channels="ring").generate()
+
+
+@settings(max_examples=60)
+@given(rows=st.integers(1, 7), cols=st.integers(1, 7), seed=st.integers(0, 2**16))
+def test_windows_hold_the_peak_at_the_centre_and_zero_outside_the_grid(rows, cols, seed):
+    loads = np.random.default_rng(seed).normal(size=(3, rows * cols))
+    windows = windows_around_peaks(loads, rows, cols)
+    assert np.array_equal(windows[:, 4], loads.max(axis=1))
+    indices = window_indices(rows, cols)
+    outside = indices == rows * cols
+    assert outside.sum() == 9 * rows * cols - sum(                       # cells inside each 3 x 3 window
+        (min(r + 1, rows - 1) - max(r - 1, 0) + 1) * (min(c + 1, cols - 1) - max(c - 1, 0) + 1)
+        for r in range(rows) for c in range(cols))
+    peak = loads.argmax(axis=1)
+    assert np.all(windows[outside[peak]] == 0.0)

@@ -37,7 +37,10 @@ Protocols:
   `moving_average_frames` hold frames, applied here on the host side as the paper's pipeline
   did, so a deployed model takes the averaged reading); targets force_n (the force sensor's
   reading over the same frames), x_mm, y_mm of the press; groups = the repetition, so a
-  grouped 70/30 split keeps whole repetitions apart.
+  grouped 70/30 split keeps whole repetitions apart. With `characterisation_channels: window`
+  the channels are the 3 x 3 cells around each press's largest change instead
+  (data/contact_windows.py, the window the contact tracker reads a contact's force from) and
+  the target is force_n alone.
 - `stream` (sec. 3.3): `n_rest_frames` frames without contact (the tracker's calibration),
   then sessions of 1-5 contacts that tap, hold, glide, cross, merge and split
   (data/contact_streams.py), each followed by a gap. `stream()` returns a ContactStream with
@@ -49,6 +52,7 @@ import numpy as np
 import pandas as pd
 
 from data.contact_sessions import SESSIONS, Choreography, choreograph
+from data.contact_windows import window_channel_names, windows_around_peaks
 from data.contact_streams import ContactStream, check_grid
 from data.errors import InputError
 from data.physics.elastic_half_space import disc_quadrature, vertical_stress_pa
@@ -58,6 +62,7 @@ from data.tables import SensorTable
 
 EPSILON_0_F_PER_M = 8.8541878128e-12
 TARGETS = ["force_n", "x_mm", "y_mm"]
+CHARACTERISATION_CHANNELS = ("cells", "window")
 PRESSES_PER_CHUNK = 256      # characterisation presses simulated together (memory, not results)
 FRAMES_PER_CHUNK = 2048      # stream frames simulated together
 PROFILES = ("uniform", "punch", "hertz")
@@ -164,7 +169,7 @@ class Capacitive6x6Scene:
                  force_levels_n=(0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0), n_repetitions=100,
                  press_cells=((1, 1), (1, 4), (4, 1), (4, 4)), force_jitter=0.02, force_sensor_noise_n=0.005,
                  rest_frames_per_press=30, ramp_frames=4, hold_frames=20, moving_average_frames=5,
-                 n_rest_frames=120, sessions=SESSIONS, session_s=3.0, gap_s=0.5, max_contacts=5,
+                 characterisation_channels="cells", n_rest_frames=120, sessions=SESSIONS, session_s=3.0, gap_s=0.5, max_contacts=5,
                  contact_force_range_n=(0.3, 3.0), contact_radius_range_mm=(3.0, 5.0),
                  contact_speed_range_mm_s=(15.0, 40.0), contact_profile="hertz", progress=False):
         self.rows = rows
@@ -191,6 +196,7 @@ class Capacitive6x6Scene:
         self.ramp_frames = ramp_frames
         self.hold_frames = hold_frames
         self.moving_average_frames = moving_average_frames
+        self.characterisation_channels = characterisation_channels
         self.n_rest_frames = n_rest_frames
         self.sessions = sessions
         self.session_s = session_s
@@ -223,6 +229,9 @@ class Capacitive6x6Scene:
         if not 0.0 <= self.probe_radius_mm <= 15.0:
             fail(f"probe_radius_mm must be in [0, 15], got {self.probe_radius_mm!r}")
         if self.protocol == "characterisation":
+            if self.characterisation_channels not in CHARACTERISATION_CHANNELS:
+                fail(f"characterisation_channels must be one of {', '.join(CHARACTERISATION_CHANNELS)}, "
+                     f"got '{self.characterisation_channels}'")
             levels = np.asarray(self.force_levels_n, dtype=float)
             if levels.ndim != 1 or len(levels) == 0 or not np.all(np.isfinite(levels)) or np.any(levels <= 0):
                 fail(f"force_levels_n must be a list of positive forces, got {self.force_levels_n!r}")
@@ -383,15 +392,20 @@ class Capacitive6x6Scene:
             effects = state["effects"]
         sensed_force = applied[:, window].mean(axis=1) \
             + self.force_sensor_noise_n * rng.standard_normal(n_presses) / np.sqrt(self.moving_average_frames)
-        channels = channel_names(self.rows, self.cols)
+        targets = list(TARGETS)
+        if self.characterisation_channels == "window":  # what the tracker reads around a contact's peak
+            channels, reading, targets = window_channel_names(), windows_around_peaks(reading, self.rows, self.cols), ["force_n"]
+        else:
+            channels = channel_names(self.rows, self.cols)
         frame = pd.DataFrame(reading, columns=channels)
         frame["force_n"], frame["x_mm"], frame["y_mm"] = sensed_force, x_mm, y_mm
         description = {"source": "scene", "scene": self.name, "protocol": self.protocol,
                        "effects": effects, "n_samples": n_presses, "grid": [self.rows, self.cols],
                        "pitch_mm": float(self.pitch_mm), "press_cells": unique.tolist(),
                        "reading": "change of RMC counts from the rest frames before each press, "
-                                  f"moving average of {self.moving_average_frames} frames"}
-        return SensorTable(frame, channels, list(TARGETS), np.asarray(repetition), description)
+                                  f"moving average of {self.moving_average_frames} frames",
+                       "channels": self.characterisation_channels}
+        return SensorTable(frame, channels, targets, np.asarray(repetition), description)
 
     # -- protocol: stream -------------------------------------------------------------------
     def choreography(self) -> Choreography:

@@ -14,12 +14,14 @@ contacts.csv (the first tracker's contacts: frame, id, x_mm, y_mm, cells, mean_l
 force_n) and contacts_<name>.csv for the others, TensorBoard scalars, contacts.gif (heatmap with
 ids, a time-series panel per contact, as the paper's Fig. 13-14) and contacts.png (one frame).
 
-Force per contact: with `force_model: linear` on a simulated stream, a least-squares line from a
-contact's load sum (RMC counts above rest and above threshold, 3 x 3 cells around its peak) to
-force, fitted on the same scene's characterisation presses at cell centres processed with each
-tracker's own thresholds (the paper's "correlation factor" is the slope of such a fit on one
-cell's reading, sec. 3.5; a moving touch shares its load between up to four crossings, so the
-sum around the peak is the steadier feature).
+Force per contact comes from the regression pipeline's fitted model (`force_model: pipeline`):
+the configured `model` (the experiment sets the paper's linear regression; any `model=` works)
+is fitted by the shared pipeline (datamodule, grouped split, report metrics) on the scene's
+characterisation presses read as the tracker reads a contact, the 3 x 3 cells around the
+peak (`characterisation_channels: window`, data/contact_windows.py), and every tracker reads
+each contact's window through that same fitted pipeline. Or `force_model: <run folder or
+pipeline.pkl>` of such a run (`python train.py experiment=capacitive_force hydra.mode=RUN
+scene.characterisation_channels=window`), or `none`.
 """
 import time
 from pathlib import Path
@@ -28,15 +30,17 @@ import numpy as np
 import pandas as pd
 from hydra.utils import get_object, instantiate
 from omegaconf import DictConfig, OmegaConf
-from sklearn.linear_model import LinearRegression
 
 from data.atomic import atomic_write_json, atomic_write_text
 from data.contact_streams import ContactStream, load_frames
+from data.contact_windows import window_channel_names
 from data.errors import InputError
 from models.contact_tracker import ContactTracker
+from models.deployable import load_pipeline
 from models.report.contact_animation import write_contact_animation
 from models.report.tensorboard_logger import TensorBoardLogger
 from models.report.tracking_metrics import evaluate_tracking
+from models.runs.regression import fit_and_evaluate
 
 CSV_COLUMNS = ["frame", "id", "x_mm", "y_mm", "cells", "mean_load", "peak_load", "force_n"]
 
@@ -56,42 +60,46 @@ def load_stream(cfg: DictConfig, recording: dict | None) -> tuple[ContactStream,
     return scene.stream(), scene
 
 
-def characterisation_table(scene, repetitions: int):
-    """The scene's robot presses at cell centres (moving-averaged change of every cell, and the
-    force sensor's reading)."""
-    scene.protocol = "characterisation"
-    scene.n_repetitions = int(repetitions)
-    return scene.generate()
+def fit_force_pipeline(cfg: DictConfig, scene, repetitions: int):
+    """The configured model fitted by the regression pipeline on the scene's characterisation
+    presses, each read as the 3 x 3 window around its peak -> (pipeline, summary)."""
+    scene.protocol, scene.characterisation_channels, scene.n_repetitions = "characterisation", "window", int(repetitions)
+    datamodule = instantiate(cfg.data, source=scene).setup()
+    result = fit_and_evaluate(cfg, datamodule)
+    summary = {"model": result.metrics["model"], "reads": "3x3 window of loads around a contact's peak",
+               "presses": int(len(datamodule.y)), "split": datamodule.summary()["split"],
+               "fit_time_s": result.metrics["fit_time_s"],
+               "val": result.metrics["val"], "test": result.metrics["test"]}
+    return result.pipeline, summary
 
 
-def fit_force_model(table, tracker: ContactTracker) -> tuple[LinearRegression, dict]:
-    """Force from what the tracker sums for a contact: the load above threshold in the 3 x 3
-    cells around its peak. The same sum is taken for every characterisation press (around its
-    largest cell, with the fitted tracker's thresholds) and a least-squares line is fitted to
-    the force sensor's reading; slope in N per count, its inverse in counts per N (the paper's
-    "correlation factor" is such a slope, sec. 3.5, there on one cell's reading)."""
-    reading = table.channels
-    peak_cell = reading.argmax(axis=1)
-    window = tracker.neighbourhood_[peak_cell]
-    above = reading > (tracker.threshold_ - tracker.mean_)
-    summed = (np.take_along_axis(reading * above, window, axis=1) * tracker.window_weight_[peak_cell]).sum(axis=1)
-    force = table.frame["force_n"].to_numpy(float)
-    model = LinearRegression().fit(summed[:, None], force)
-    slope = float(model.coef_[0])
-    return model, {"kind": "linear on the 3x3 load sum above threshold", "presses": int(len(force)),
-                   "n_per_count": slope, "counts_per_n": float(1.0 / slope) if slope else float("nan"),
-                   "intercept_n": float(model.intercept_), "r2_fit": float(model.score(summed[:, None], force))}
+def load_force_pipeline(path: str):
+    """A saved run's pipeline (its folder or pipeline.pkl) that reads the 3 x 3 window."""
+    path = Path(path)
+    path = path / "pipeline.pkl" if path.is_dir() else path
+    if not path.is_file():
+        raise InputError(f"capacitive_tracking: force_model {path} does not exist (a run folder or its pipeline.pkl)")
+    pipeline = load_pipeline(path)
+    if list(getattr(pipeline, "channel_names", [])) != window_channel_names() or "force_n" not in pipeline.target_names:
+        raise InputError(f"capacitive_tracking: force_model {path} does not read the 3x3 window to force_n; train "
+                         "it with experiment=capacitive_force hydra.mode=RUN scene.characterisation_channels=window")
+    return pipeline, {"model": type(pipeline.model).__name__, "reads": "3x3 window of loads around a contact's peak",
+                      "loaded_from": str(path)}
 
 
-def track(stream: ContactStream, params: dict, force_table, keep_images: bool):
-    """Fit on the rest frames (and the force line, given presses), update frame by frame;
-    returns (contacts with stream frame numbers, timing, force-model summary, images)."""
+def force_reader(pipeline):
+    """Contacts' windows (n, 9) -> force_n through the pipeline (its features, scaler and model)."""
+    column = pipeline.target_names.index("force_n")
+    return lambda windows: pipeline.predict_raw(windows)[0][:, column]
+
+
+def track(stream: ContactStream, params: dict, force_pipeline, keep_images: bool):
+    """Fit on the rest frames, update frame by frame (force from the pipeline, given one);
+    returns (contacts with stream frame numbers, timing, images)."""
+    if force_pipeline is not None:
+        params = {**params, "force_model": force_reader(force_pipeline), "force_feature": "window"}
     tracker = ContactTracker(rows=stream.rows, cols=stream.cols, pitch_mm=stream.pitch_mm, **params)
     tracker.fit(stream.frames[:stream.n_rest_frames])
-    force_info = None
-    if force_table is not None:
-        model, force_info = fit_force_model(force_table, tracker)
-        tracker.set_params(force_model=model, force_feature="sum")  # read from the first update on
     live = stream.frames[stream.n_rest_frames:]
     records, elapsed_ns = [], np.zeros(len(live))
     labels = np.zeros(live.shape, dtype=np.int64) if keep_images else None
@@ -116,11 +124,11 @@ def track(stream: ContactStream, params: dict, force_table, keep_images: bool):
         grid = (stream.rows, stream.cols)
         load = live - tracker.mean_.reshape(grid)
         images = (labels, load > (tracker.threshold_ - tracker.mean_).reshape(grid), load)
-    return table, timing, force_info, images
+    return table, timing, images
 
 
 def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_force_n: float = 0.3,
-                            match_radius_mm: float | None = None, force_model: str | None = "linear",
+                            match_radius_mm: float | None = None, force_model: str | None = "pipeline",
                             force_repetitions: int = 10, recording: dict | None = None,
                             animation: dict | None = None) -> dict:
     output_dir = Path(output_dir)
@@ -130,31 +138,33 @@ def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_for
     animation = dict(animation or {})
     if not trackers:
         raise InputError("capacitive_tracking: study.trackers lists no tracker")
-    if force_model not in (None, "none", "linear"):
-        raise InputError(f"capacitive_tracking: force_model must be linear or none, got '{force_model}'")
     stream, scene = load_stream(cfg, recording)
     radius = float(match_radius_mm) if match_radius_mm is not None else stream.pitch_mm
-    force_table = characterisation_table(scene, force_repetitions) if force_model == "linear" and scene is not None else None
+    force_pipeline, force_info = None, None
+    if force_model == "pipeline" and scene is not None:
+        force_pipeline, force_info = fit_force_pipeline(cfg, scene, force_repetitions)
+    elif force_model not in (None, "none", "pipeline"):
+        force_pipeline, force_info = load_force_pipeline(force_model)
     metrics = {"stream": {"source": stream.description.get("source", "scene"), "frames": stream.n_frames,
                           "rest_frames": stream.n_rest_frames, "grid": [stream.rows, stream.cols],
                           "pitch_mm": stream.pitch_mm, "frame_rate_hz": stream.frame_rate_hz,
                           "ground_truth": stream.truth is not None},
                "evaluation": {"match_radius_mm": radius, "min_force_n": float(min_force_n)}
                if stream.truth is not None else None,
+               "force_model": force_info,
                "trackers": {}}
     primary = next(iter(trackers))
     tables, images = {}, None
     for name, params in trackers.items():
-        table, timing, force_info, frames = track(stream, dict(params or {}), force_table,
-                                                  keep_images=name == primary)
+        table, timing, frames = track(stream, dict(params or {}), force_pipeline, keep_images=name == primary)
         images = frames if name == primary else images
         tables[name] = table
-        entry = {"params": params, "timing": timing, "force_model": force_info,
+        entry = {"params": params, "timing": timing,
                  "contacts_reported": int(len(table)), "ids_issued": int(table.id.nunique())}
         if stream.truth is not None:
             entry.update(evaluate_tracking(stream.truth, table, stream.n_frames, radius, min_force_n,
                                            group_column="session"))
-            if force_info is not None:
+            if force_pipeline is not None:
                 entry["overall"].update(_force_error(stream.truth, table, radius))
         metrics["trackers"][name] = entry
 
