@@ -50,6 +50,7 @@ handful of numpy calls on the few cells above threshold; ids and tracks are the 
 loops (over contacts, not cells).
 """
 import collections
+import functools
 import math
 from dataclasses import dataclass
 
@@ -72,20 +73,32 @@ MAX, MIN, ALL, ANY = np.maximum.reduce, np.minimum.reduce, np.logical_and.reduce
 
 @dataclass(frozen=True)
 class FrameContacts:
-    """One frame's contacts: parallel arrays, one entry per contact, and the id image."""
+    """One frame's contacts: parallel arrays, one entry per contact; the id image and the areas
+    are computed when asked for (most applications read centroids and ids only)."""
     frame: int                  # frames updated since fit, from 0
     ids: np.ndarray             # stable contact ids (int64), unique within the frame
     x_mm: np.ndarray            # load-weighted centroid (3 x 3 cells around the peak), column direction,
     y_mm: np.ndarray            # ... and row direction, both from the grid's corner
     n_cells: np.ndarray         # cells in the contact
-    area_mm2: np.ndarray        # n_cells * pitch^2
     mean_load: np.ndarray       # mean reading above the rest mean over the contact's cells (RMC)
     peak_load: np.ndarray       # largest reading above the rest mean in the contact (RMC)
     force_n: np.ndarray         # from the force model, NaN without one
-    labels: np.ndarray          # (rows, cols) int: 0 background, else the contact id on its cells
+    cell_contact: np.ndarray    # per cell (row-major, one padding entry at the end): 0 or the contact's index + 1
+    grid: tuple                 # (rows, cols, pitch_mm)
 
     def __len__(self) -> int:
         return len(self.ids)
+
+    @functools.cached_property
+    def labels(self) -> np.ndarray:
+        """(rows, cols) int: 0 background, else the contact id on its cells."""
+        rows, cols, _ = self.grid
+        return np.r_[0, self.ids][self.cell_contact[:-1]].reshape(rows, cols)
+
+    @property
+    def area_mm2(self) -> np.ndarray:
+        """n_cells * pitch^2."""
+        return self.n_cells * self.grid[2] ** 2
 
     def records(self) -> list[dict]:
         return [dict(frame=self.frame, id=int(i), x_mm=float(x), y_mm=float(y), cells=int(n),
@@ -256,7 +269,6 @@ class ContactTracker(BaseEstimator):
         self.rows_of_ = np.arange(self.n_cells_)
         self.track_of_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)    # scratch: detection -> track index + 1
         self.owner_buffer_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)
-        self.id_of_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)       # scratch: contact number -> id
         self.contact_of_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)  # scratch: contact number of each peak
         self.peak_mark_ = np.zeros(self.n_cells_ + 1, dtype=bool)       # scratch: peaks of this frame
         self.above_load_ = np.zeros(self.n_cells_ + 1)                  # scratch: load above threshold, padded
@@ -265,8 +277,9 @@ class ContactTracker(BaseEstimator):
         self.padded_load_ = np.full(self.n_cells_ + 1, -np.inf)
         self.gate_mm_ = 2.0 * self.pitch_mm if self.gate_mm is None else float(self.gate_mm)
         self.grid_mm_ = np.array([cols, rows], dtype=np.float64) * float(self.pitch_mm)
-        self.empty_labels_ = np.zeros((rows, cols), dtype=np.int64)
-        self.empty_labels_.flags.writeable = False
+        self.no_cell_contact_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)
+        self.no_cell_contact_.flags.writeable = False
+        self.grid_ = (rows, cols, float(self.pitch_mm))
         self.reset()
         return self
 
@@ -339,7 +352,7 @@ class ContactTracker(BaseEstimator):
             self._age(self.tracks_)
         empty = np.zeros(0)
         return FrameContacts(self.frame_index_, np.zeros(0, dtype=np.int64), empty, empty, empty,
-                             empty, empty, empty, empty, self.empty_labels_)
+                             empty, empty, empty, self.no_cell_contact_, self.grid_)
 
     def _segment_ours(self, load, cells):
         """Grey scaling by the local peak, Otsu, then components -> (label per cell (flat, 0
@@ -480,12 +493,8 @@ class ContactTracker(BaseEstimator):
             ids = self._associate(cells, contact, n_cells.astype(np.float64), total, x_mm, y_mm, xy_mm)
         if self.hold_sensitivity is not None:
             self.near_contact_ = (labels > 0)[self.neighbourhood_].any(axis=1)
-        id_of = self.id_of_  # contact number -> id (0 -> 0: background)
-        id_of[1:n + 1] = ids
-        id_image = id_of[labels[:-1]].reshape(self.rows, self.cols)
         force = self.no_force_[:n] if self.force_model is None else self._force(peak, mean_load, total, load, window, allowed)
-        return FrameContacts(self.frame_index_, ids, x_mm, y_mm, n_cells, n_cells * self.pitch_mm ** 2, mean_load,
-                             peak, force, id_image)
+        return FrameContacts(self.frame_index_, ids, x_mm, y_mm, n_cells, mean_load, peak, force, labels, self.grid_)
 
     def _force(self, peak, mean_load, total, load, window, allowed) -> np.ndarray:
         """Force per contact from the force model. "window": the load of the 3 x 3 cells around
@@ -529,12 +538,20 @@ class ContactTracker(BaseEstimator):
             # If each track overlaps exactly one detection and each detection one track (Jaccard
             # >= min_jaccard, written without a division), that permutation is what the global
             # assignment below returns (overlap matches score above 1, all others at most 1)
+            # (a handful of contacts: the test runs in plain Python, cheaper than a dozen numpy calls)
             pairs = n_det + 1
-            inter = np.bincount(self.owner_[cells] * pairs + contact,
-                                minlength=pairs * pairs).reshape(pairs, pairs)[1:, 1:]
-            ok = inter * (1.0 + self.min_jaccard) >= self.min_jaccard * (self.track_size_[:, None] + det_size)
-            if np.count_nonzero(ok) == n_det and ALL(ANY(ok, axis=0)) and ALL(ANY(ok, axis=1)):
-                return self._follow_all(ok.argmax(axis=1), cells, contact, det_size, xy_mm)
+            inter = np.bincount(self.owner_[cells] * pairs + contact, minlength=pairs * pairs).tolist()
+            jaccard, track_size, sizes = self.min_jaccard, self.track_size_.tolist(), det_size.tolist()
+            match = []
+            for t in range(n_det):
+                row = inter[(t + 1) * pairs + 1:(t + 2) * pairs]
+                ok = [d for d in range(n_det) if row[d] * (1.0 + jaccard) >= jaccard * (track_size[t] + sizes[d])]
+                if len(ok) != 1:
+                    break
+                match.append(ok[0])
+            else:
+                if len(set(match)) == n_det:
+                    return self._follow_all(np.array(match), cells, contact, det_size, xy_mm)
         det_cells = self._one_hot(cells, contact, n_det)
         self._cells_to_tracks()
         if not tracks:
