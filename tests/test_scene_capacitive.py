@@ -376,3 +376,13 @@ def test_windows_hold_the_peak_at_the_centre_and_zero_outside_the_grid(rows, col
         for r in range(rows) for c in range(cols))
     peak = loads.argmax(axis=1)
     assert np.all(windows[outside[peak]] == 0.0)
+
+
+def test_press_offsets_move_the_presses_within_their_cells():
+    centred = scene(n_repetitions=2).generate()
+    moved = scene(n_repetitions=2, press_offset_mm=3.0).generate()
+    shift = np.abs(moved.frame[["x_mm", "y_mm"]].to_numpy() - centred.frame[["x_mm", "y_mm"]].to_numpy())
+    assert shift.max() <= 3.0 and shift.max() > 1.0
+    assert not np.allclose(moved.channels, centred.channels)
+    with pytest.raises(InputError, match="press_offset_mm"):
+        scene(press_offset_mm=4.0).generate()        # beyond half the 6 mm pitch

@@ -169,7 +169,7 @@ class Capacitive6x6Scene:
                  force_levels_n=(0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0), n_repetitions=100,
                  press_cells=((1, 1), (1, 4), (4, 1), (4, 4)), force_jitter=0.02, force_sensor_noise_n=0.005,
                  rest_frames_per_press=30, ramp_frames=4, hold_frames=20, moving_average_frames=5,
-                 characterisation_channels="cells", n_rest_frames=120, sessions=SESSIONS, session_s=3.0, gap_s=0.5, max_contacts=5,
+                 characterisation_channels="cells", press_offset_mm=0.0, n_rest_frames=120, sessions=SESSIONS, session_s=3.0, gap_s=0.5, max_contacts=5,
                  contact_force_range_n=(0.3, 3.0), contact_radius_range_mm=(3.0, 5.0),
                  contact_speed_range_mm_s=(15.0, 40.0), contact_profile="hertz", progress=False):
         self.rows = rows
@@ -197,6 +197,7 @@ class Capacitive6x6Scene:
         self.hold_frames = hold_frames
         self.moving_average_frames = moving_average_frames
         self.characterisation_channels = characterisation_channels
+        self.press_offset_mm = press_offset_mm
         self.n_rest_frames = n_rest_frames
         self.sessions = sessions
         self.session_s = session_s
@@ -229,6 +230,8 @@ class Capacitive6x6Scene:
         if not 0.0 <= self.probe_radius_mm <= 15.0:
             fail(f"probe_radius_mm must be in [0, 15], got {self.probe_radius_mm!r}")
         if self.protocol == "characterisation":
+            if not (isinstance(self.press_offset_mm, (int, float)) and 0.0 <= self.press_offset_mm <= self.pitch_mm / 2):
+                fail(f"press_offset_mm must be in [0, pitch_mm / 2 = {self.pitch_mm / 2}], got {self.press_offset_mm!r}")
             if self.characterisation_channels not in CHARACTERISATION_CHANNELS:
                 fail(f"characterisation_channels must be one of {', '.join(CHARACTERISATION_CHANNELS)}, "
                      f"got '{self.characterisation_channels}'")
@@ -348,19 +351,21 @@ class Capacitive6x6Scene:
         rep, cell, level = rep.ravel(), cell.ravel(), level.ravel()
         rng = random_generator_for(self.seed, "protocol")
         force = levels[level] * (1.0 + self.force_jitter * rng.standard_normal(len(rep)))
-        return rep, cells[cell], np.maximum(force, 0.0), rng
+        offsets = rng.uniform(-1.0, 1.0, (len(rep), 2)) * self.press_offset_mm if self.press_offset_mm else None
+        return rep, cells[cell], np.maximum(force, 0.0), rng, offsets
 
     def generate(self) -> SensorTable | ContactStream:
         """The protocol's data: a SensorTable of presses (characterisation) or a ContactStream."""
         self._check()
         if self.protocol == "stream":
             return self.stream()
-        rep, cells, force, rng = self._press_schedule()
-        return self.simulate(rep, cells, force, rng)
+        rep, cells, force, rng, offsets = self._press_schedule()
+        return self.simulate(rep, cells, force, rng, offsets)
 
-    def simulate(self, repetition, cells, force_n, rng=None) -> SensorTable:
-        """Presses of the probe at cell centres (cells [n, 2] as row, col) with the given forces
-        through the listed effects; one SensorTable row per press."""
+    def simulate(self, repetition, cells, force_n, rng=None, offsets_mm=None) -> SensorTable:
+        """Presses of the probe at cell centres (cells [n, 2] as row, col), moved by offsets_mm
+        ([n, 2] as x, y; None: at the centres), with the given forces through the listed
+        effects; one SensorTable row per press."""
         cells = np.asarray(cells, dtype=np.int64).reshape(-1, 2)
         force_n = np.asarray(force_n, dtype=float)
         rng = rng if rng is not None else random_generator_for(self.seed, "protocol")
@@ -371,9 +376,11 @@ class Capacitive6x6Scene:
         per_press = len(profile)
         x_cells, y_cells = self.cell_centres_mm()
         x_mm, y_mm = x_cells[cells[:, 0], cells[:, 1]], y_cells[cells[:, 0], cells[:, 1]]
-        unique, which = np.unique(cells, axis=0, return_inverse=True)
-        pattern = self.stress_per_newton(x_cells[unique[:, 0], unique[:, 1]], y_cells[unique[:, 0], unique[:, 1]],
-                                         self.probe_radius_mm, self.probe_profile)       # [cells, rows, cols]
+        if offsets_mm is not None:
+            x_mm, y_mm = x_mm + offsets_mm[:, 0], y_mm + offsets_mm[:, 1]
+        unique, which = np.unique(np.column_stack([x_mm, y_mm]), axis=0, return_inverse=True)
+        pattern = self.stress_per_newton(unique[:, 0], unique[:, 1],
+                                         self.probe_radius_mm, self.probe_profile)       # [positions, rows, cols]
         applied = force_n[:, None] * profile[None, :]                                    # [presses, frames]
         # The paper's moving average (sec. 2.6): a trailing mean over the last frames of the hold,
         # taken against the mean of the rest frames just before the press.
@@ -401,7 +408,8 @@ class Capacitive6x6Scene:
         frame["force_n"], frame["x_mm"], frame["y_mm"] = sensed_force, x_mm, y_mm
         description = {"source": "scene", "scene": self.name, "protocol": self.protocol,
                        "effects": effects, "n_samples": n_presses, "grid": [self.rows, self.cols],
-                       "pitch_mm": float(self.pitch_mm), "press_cells": unique.tolist(),
+                       "pitch_mm": float(self.pitch_mm), "press_cells": np.unique(cells, axis=0).tolist(),
+                       "press_offset_mm": float(self.press_offset_mm),
                        "reading": "change of RMC counts from the rest frames before each press, "
                                   f"moving average of {self.moving_average_frames} frames",
                        "channels": self.characterisation_channels}

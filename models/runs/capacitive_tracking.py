@@ -64,6 +64,7 @@ def fit_force_pipeline(cfg: DictConfig, scene, repetitions: int):
     """The configured model fitted by the regression pipeline on the scene's characterisation
     presses, each read as the 3 x 3 window around its peak -> (pipeline, summary)."""
     scene.protocol, scene.characterisation_channels, scene.n_repetitions = "characterisation", "window", int(repetitions)
+    scene.press_offset_mm = scene.pitch_mm / 2   # contacts land anywhere, not only on crossings
     datamodule = instantiate(cfg.data, source=scene).setup()
     result = fit_and_evaluate(cfg, datamodule)
     summary = {"model": result.metrics["model"], "reads": "3x3 window of loads around a contact's peak",
