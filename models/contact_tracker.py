@@ -50,9 +50,7 @@ handful of numpy calls on the few cells above threshold; ids and tracks are the 
 loops (over contacts, not cells).
 """
 import collections
-import functools
 import math
-from dataclasses import dataclass
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -71,25 +69,25 @@ HISTORY_FRAMES = 10  # centroids kept per track for the velocity a merge remembe
 MAX, MIN, ALL, ANY = np.maximum.reduce, np.minimum.reduce, np.logical_and.reduce, np.logical_or.reduce
 
 
-@dataclass(frozen=True)
 class FrameContacts:
     """One frame's contacts: parallel arrays, one entry per contact; the id image and the areas
-    are computed when asked for (most applications read centroids and ids only)."""
-    frame: int                  # frames updated since fit, from 0
-    ids: np.ndarray             # stable contact ids (int64), unique within the frame
-    x_mm: np.ndarray            # load-weighted centroid (3 x 3 cells around the peak), column direction,
-    y_mm: np.ndarray            # ... and row direction, both from the grid's corner
-    n_cells: np.ndarray         # cells in the contact
-    mean_load: np.ndarray       # mean reading above the rest mean over the contact's cells (RMC)
-    peak_load: np.ndarray       # largest reading above the rest mean in the contact (RMC)
-    force_n: np.ndarray         # from the force model, NaN without one
-    cell_contact: np.ndarray    # per cell (row-major, one padding entry at the end): 0 or the contact's index + 1
-    grid: tuple                 # (rows, cols, pitch_mm)
+    are computed when asked for (most applications read centroids and ids only). A plain class
+    with slots: built once per frame, where a frozen dataclass costs a few microseconds more.
 
-    def __len__(self) -> int:
-        return len(self.ids)
+    frame: frames updated since fit, from 0; ids: stable contact ids (int64), unique within the
+    frame; x_mm, y_mm: load-weighted centroid (3 x 3 cells around the peak) from the grid's
+    corner, column and row direction; n_cells: cells in the contact; mean_load, peak_load: mean
+    and largest reading above the rest mean over its cells (RMC); force_n: from the force
+    model, NaN without one; cell_contact: per cell (row-major, one padding entry at the end) 0
+    or the contact's index + 1; grid: (rows, cols, pitch_mm)."""
+    __slots__ = ("frame", "ids", "x_mm", "y_mm", "n_cells", "mean_load", "peak_load", "force_n", "cell_contact", "grid")
 
-    @functools.cached_property
+    def __init__(self, frame, ids, x_mm, y_mm, n_cells, mean_load, peak_load, force_n, cell_contact, grid):
+        self.frame, self.ids, self.x_mm, self.y_mm, self.n_cells = frame, ids, x_mm, y_mm, n_cells
+        self.mean_load, self.peak_load, self.force_n, self.cell_contact, self.grid = \
+            mean_load, peak_load, force_n, cell_contact, grid
+
+    @property
     def labels(self) -> np.ndarray:
         """(rows, cols) int: 0 background, else the contact id on its cells."""
         rows, cols, _ = self.grid
@@ -99,6 +97,9 @@ class FrameContacts:
     def area_mm2(self) -> np.ndarray:
         """n_cells * pitch^2."""
         return self.n_cells * self.grid[2] ** 2
+
+    def __len__(self) -> int:
+        return len(self.ids)
 
     def records(self) -> list[dict]:
         return [dict(frame=self.frame, id=int(i), x_mm=float(x), y_mm=float(y), cells=int(n),
@@ -265,10 +266,8 @@ class ContactTracker(BaseEstimator):
         self.contact_numbers_ = np.arange(1, self.n_cells_ + 1)[:, None]
         self.no_force_ = np.full(self.n_cells_, np.nan)
         self.no_force_.flags.writeable = False
-        self.pointer_ = np.arange(self.n_cells_ + 1)
+        self.target_ = np.arange(self.n_cells_ + 1)   # scratch for _segment_ours: each core cell's climb target
         self.rows_of_ = np.arange(self.n_cells_)
-        self.track_of_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)    # scratch: detection -> track index + 1
-        self.owner_buffer_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)
         self.contact_of_ = np.zeros(self.n_cells_ + 1, dtype=np.int64)  # scratch: contact number of each peak
         self.peak_mark_ = np.zeros(self.n_cells_ + 1, dtype=bool)       # scratch: peaks of this frame
         self.above_load_ = np.zeros(self.n_cells_ + 1)                  # scratch: load above threshold, padded
@@ -294,7 +293,6 @@ class ContactTracker(BaseEstimator):
         """Forget every track (a new recording with the same baseline)."""
         self.tracks_ = []
         self.track_cells_ = None    # the tracks' cells stacked (tracks x cells), None: to rebuild
-        self.track_ids_ = None      # the tracks' ids in the same order, None: to rebuild
         self.owner_ = None          # or track index + 1 on each cell of last frame's contacts, when every track was seen
         self.track_size_ = None     # with owner_: each track's cell count
         self.next_id_ = 1
@@ -383,7 +381,7 @@ class ContactTracker(BaseEstimator):
         value.fill(-np.inf)
         value[core] = load[core]
         window = self.window_[core]
-        target = self.pointer_.copy()
+        target = self.target_  # only core cells' entries are written and read (they point at core cells)
         target[core] = window[self.rows_of_[:len(core)], value[window].argmax(axis=1)]
         peak = self._climb(target, target[core])
         peaks = core[peak == core]
@@ -490,7 +488,7 @@ class ContactTracker(BaseEstimator):
             ids = paper_track_clusters(self.prev_ids_, self.prev_cells_, np.arange(1, n + 1), one_hot)
             self.prev_ids_, self.prev_cells_ = ids, one_hot
         else:
-            ids = self._associate(cells, contact, n_cells.astype(np.float64), total, x_mm, y_mm, xy_mm)
+            ids = self._associate(cells, contact, n_cells.astype(np.float64), total, x_mm, y_mm, xy_mm, labels)
         if self.hold_sensitivity is not None:
             self.near_contact_ = (labels > 0)[self.neighbourhood_].any(axis=1)
         force = self.no_force_[:n] if self.force_model is None else self._force(peak, mean_load, total, load, window, allowed)
@@ -525,10 +523,11 @@ class ContactTracker(BaseEstimator):
         if unmatched:
             kept = [t for t in self.tracks_ if t.missing <= self.max_missing_frames]
             if len(kept) != len(self.tracks_):
-                self.tracks_, self.track_cells_, self.track_ids_ = kept, None, None
+                self.tracks_, self.track_cells_ = kept, None
 
-    def _associate(self, cells, contact, det_size, det_load, det_x, det_y, xy_mm) -> np.ndarray:
-        """Ids for this frame's detections (cells and their detection numbers 1..n; det_load:
+    def _associate(self, cells, contact, det_size, det_load, det_x, det_y, xy_mm, labels) -> np.ndarray:
+        """Ids for this frame's detections (cells and their detection numbers 1..n, labels: the
+        detection number of every cell, padded; det_load:
         summed load, what "larger" means when a contact splits)."""
         n_det = len(det_x)
         tracks = self.tracks_
@@ -541,7 +540,7 @@ class ContactTracker(BaseEstimator):
             # (a handful of contacts: the test runs in plain Python, cheaper than a dozen numpy calls)
             pairs = n_det + 1
             inter = np.bincount(self.owner_[cells] * pairs + contact, minlength=pairs * pairs).tolist()
-            jaccard, track_size, sizes = self.min_jaccard, self.track_size_.tolist(), det_size.tolist()
+            jaccard, track_size, sizes = self.min_jaccard, self.track_size_, det_size.tolist()
             match = []
             for t in range(n_det):
                 row = inter[(t + 1) * pairs + 1:(t + 2) * pairs]
@@ -551,7 +550,7 @@ class ContactTracker(BaseEstimator):
                 match.append(ok[0])
             else:
                 if len(set(match)) == n_det:
-                    return self._follow_all(np.array(match), cells, contact, det_size, xy_mm)
+                    return self._follow_all(match, cells, contact, det_size, xy_mm, labels)
         det_cells = self._one_hot(cells, contact, n_det)
         self._cells_to_tracks()
         if not tracks:
@@ -569,7 +568,7 @@ class ContactTracker(BaseEstimator):
             # below would return: skip the distance matrix and the solver
             ok = inter * (1.0 + self.min_jaccard) >= self.min_jaccard * (self.track_cells_.sum(axis=1)[:, None] + det_size)
             if ok.sum() == n_det and ok.any(axis=0).all() and ok.any(axis=1).all():
-                return self._follow_all(ok.argmax(axis=1), cells, contact, det_size, xy_mm)
+                return self._follow_all(ok.argmax(axis=1).tolist(), cells, contact, det_size, xy_mm, labels)
         state = np.array([(t.size, t.x + t.vx * (t.missing + 1), t.y + t.vy * (t.missing + 1), t.x, t.y)
                           for t in tracks])
         jaccard = inter / (state[:, :1] + det_size - inter)
@@ -583,7 +582,7 @@ class ContactTracker(BaseEstimator):
         rows, cols = linear_sum_assignment(score, maximize=True)
         kept = score[rows, cols] > 0
         if len(tracks) == n_det and kept.all():  # every contact found again (some by distance)
-            return self._follow_all(cols, cells, contact, det_size, xy_mm)
+            return self._follow_all(cols.tolist(), cells, contact, det_size, xy_mm, labels)
         det_of = {t: d for t, d, keep in zip(rows.tolist(), cols.tolist(), kept.tolist()) if keep}
         ids = np.zeros(n_det, dtype=np.int64)
         track_of = {d: t for t, d in det_of.items()}                    # detection -> track index
@@ -663,7 +662,7 @@ class ContactTracker(BaseEstimator):
                     self._update_members(track, np.flatnonzero(det_cells[d]), xy_mm[d])
                 ids[d] = track.id
         self.tracks_ = survivors + reinstated
-        self.track_cells_, self.track_ids_ = None, None
+        self.track_cells_ = None
         self._age(unmatched)
         for d in np.flatnonzero(ids == 0).tolist():
             track = self._new_track(det_cells[d], det_x[d], det_y[d], det_size[d])
@@ -671,32 +670,26 @@ class ContactTracker(BaseEstimator):
             ids[d] = track.id
         return ids
 
-    def _follow_all(self, cols, cells, contact, det_size, xy_mm) -> np.ndarray:
-        """Every track found again, track t at detection cols[t]: the same update as _move,
-        in plain floats (cheaper than numpy for a handful of contacts). The tracks' cells are
-        kept as one image, owner_ (track index + 1 on each cell, 0 elsewhere), until a frame
-        needs them per track (_cells_to_tracks)."""
-        tracks = self.tracks_
-        if self.track_ids_ is None:
-            self.track_ids_ = np.array([t.id for t in tracks], dtype=np.int64)
+    def _follow_all(self, cols, cells, contact, det_size, xy_mm, labels) -> np.ndarray:
+        """Every track found again, track t at detection cols[t] (a list): the same update as
+        _move, in plain floats (cheaper than numpy for a handful of contacts). The tracks'
+        cells are kept as one image, owner_ (track index + 1 on each cell, 0 elsewhere), until
+        a frame needs them per track (_cells_to_tracks)."""
         frame = self.frame_index_
-        for track, (x, y), size, col in zip(tracks, xy_mm[cols].tolist(), det_size[cols].tolist(), cols.tolist()):
-            steps = track.missing + 1
+        xy, sizes = xy_mm.tolist(), det_size.tolist()
+        ids, track_of = [0] * len(cols), [0] * (len(cols) + 1)   # track_of: detection number -> track index + 1
+        for t, (track, col) in enumerate(zip(self.tracks_, cols)):
+            (x, y), steps = xy[col], track.missing + 1
             track.vx = 0.7 * track.vx + 0.3 * (x - track.x) / steps
             track.vy = 0.7 * track.vy + 0.3 * (y - track.y) / steps
-            track.x, track.y, track.size, track.missing = x, y, size, 0
+            track.x, track.y, track.size, track.missing = x, y, sizes[col], 0
             track.path.append((frame, x, y))
             if track.memory:
                 self._update_members(track, cells[contact == col + 1], xy_mm[col])
-        track_of = self.track_of_  # detection number -> track index + 1
-        track_of[cols + 1] = self.contact_numbers_[:len(cols), 0]
-        owner = self.owner_buffer_
-        owner.fill(0)
-        owner[cells] = track_of[contact]
-        self.owner_, self.track_size_, self.track_cells_ = owner, det_size[cols], None
-        ids = np.empty(len(cols), dtype=np.int64)
-        ids[cols] = self.track_ids_
-        return ids
+            ids[col], track_of[col + 1] = track.id, t + 1
+        self.owner_ = np.array(track_of)[labels]
+        self.track_size_, self.track_cells_ = [sizes[c] for c in cols], None
+        return np.array(ids, dtype=np.int64)
 
     def _update_members(self, track, region_cells, xy_mm):
         """Where each member of a merged region is: a few Lloyd iterations of k-means (Lloyd 1982),
