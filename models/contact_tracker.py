@@ -65,6 +65,7 @@ THRESHOLDS = ("std", "variance")
 SEGMENTATIONS = ("ours", "paper")
 TRACKINGS = ("global", "paper")
 FORCE_FEATURES = ("peak", "sum", "mean", "window")
+SETTLE_FRAMES, SETTLE_MM = 10, 2.0  # merged members that moved less than this over these frames are one contact
 HISTORY_FRAMES = 10  # centroids kept per track for the velocity a merge remembers (1/6 s at 60 frames/s)
 MAX, MIN, ALL, ANY = np.maximum.reduce, np.minimum.reduce, np.logical_and.reduce, np.logical_or.reduce
 
@@ -112,12 +113,13 @@ class _Track:
     """A contact followed over frames (ours). `memory`: contacts merged into this one, as
     (id, birth, x, y, vx, vy, frame) at the moment they merged, this track's own state included.
     `path`: its last HISTORY_FRAMES (frame, x, y), for the velocity a merge remembers."""
-    __slots__ = ("id", "birth", "cells", "size", "x", "y", "vx", "vy", "missing", "memory", "path", "member_xy")
+    __slots__ = ("id", "birth", "cells", "size", "x", "y", "vx", "vy", "missing", "memory", "path", "member_xy", "member_path")
 
     def __init__(self, track_id, birth, cells, x, y, size, frame=None):
         self.id, self.birth, self.cells, self.size = track_id, birth, cells, size
         self.x, self.y, self.vx, self.vy, self.missing, self.memory = x, y, 0.0, 0.0, 0, []
         self.member_xy = None  # while merged: each member's position in the region (k-means), memory's order
+        self.member_path = collections.deque(maxlen=SETTLE_FRAMES)  # ... over the last frames
         self.path = collections.deque([(birth if frame is None else frame, x, y)], maxlen=HISTORY_FRAMES)
 
     def snapshot(self, frame):
@@ -608,6 +610,7 @@ class ContactTracker(BaseEstimator):
             host.memory.append(guest.snapshot(self.frame_index_))
             host.memory.extend(guest.memory[1:] if guest.memory else [])
             host.member_xy = None
+            host.member_path.clear()
             merged.add(younger)
             det_of.pop(m, None)
             det_of[older] = d
@@ -645,6 +648,7 @@ class ContactTracker(BaseEstimator):
                 back.add(snap[0])
             parent.memory = [s for s in parent.memory if s[0] not in back]
             parent.member_xy = None
+            parent.member_path.clear()
             if len(parent.memory) == 1:  # only its own snapshot left: nothing merged any more
                 parent.memory = []
         # update matched tracks; age the others; new ids for what is left
@@ -701,7 +705,10 @@ class ContactTracker(BaseEstimator):
         and wanders between them, carrying the older id from one true contact to the other.
         The split still matches children by the motion each member had when it merged
         (_split_by_memory): two touches passing straight through each other leave one round
-        region, whose k-means halves say nothing about who is who."""
+        region, whose k-means halves say nothing about who is who. Members that have all moved
+        less than SETTLE_MM over the last SETTLE_FRAMES frames are a merge that stays (two
+        touches pressed into one, the k-means only halving it): the region is then reported at
+        its own centroid, still with the older id."""
         cells = np.unique(self.neighbourhood_[region_cells])
         weight = self.above_load_[cells]
         cells, weight = cells[weight > 0], weight[weight > 0]
@@ -718,6 +725,10 @@ class ContactTracker(BaseEstimator):
             for axis in (0, 1):
                 moment = np.bincount(nearest, weight * xy[:, axis], minlength=len(centres))
                 centres[has, axis] = moment[has] / total[has]
+        track.member_path.append(centres.copy())
+        path = track.member_path
+        if len(path) == path.maxlen and MAX(np.hypot(*(path[-1] - path[0]).T)) < SETTLE_MM:
+            return  # the members stopped moving: a merge that stays (one touch now), at the region's centroid
         own = [s[0] for s in track.memory].index(track.id)
         if total[own] > 0:
             xy_mm[:] = centres[own]
