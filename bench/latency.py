@@ -5,7 +5,8 @@
 For each family: train on the default rubber12 scene (time-series families: materials10,
 1 epoch: latency does not depend on training), export, then measure with export/latency.py
 (what every run records): batch-1 latency p50/p99 and batch-1024 throughput, eager (numpy
-features + scikit-learn or torch) and onnxruntime with 1 intra-op thread and its default.
+features + scikit-learn or torch, forests predicting with n_jobs=1 as a deployed user would call
+them at batch 1) and onnxruntime with 1 intra-op thread and its default.
 Also prints the parity on the run's test inputs (max relative difference, and rows over 1e-4:
 where a float32 tree took another branch). Figures drift between runs by ~10-20 %.
 """
@@ -22,7 +23,7 @@ sys.path.insert(0, str(ROOT))
 
 from hydra import compose, initialize_config_dir  # noqa: E402
 
-from export.latency import measure  # noqa: E402
+from export.latency import EAGER_BASELINE, measure  # noqa: E402
 from export.run_export import export_run  # noqa: E402
 from export.onnx_predictor import OnnxPredictor  # noqa: E402
 from models.deployable import RegressionPipeline, load_pipeline  # noqa: E402
@@ -68,7 +69,10 @@ def main(argv=None):
             cost = measure(pipeline, path, args.budget)
             rows.append((family, cost, *parity(path, pipeline)))
             print(f"{family} done", file=sys.stderr)
-    print(f"\ncores: {os.cpu_count()}; latency at batch 1 in µs (p50 / p99); throughput at batch 1024 in samples/s\n")
+    load = os.getloadavg()
+    print(f"\ncores: {os.cpu_count()}; load average {load[0]:.2f} / {load[1]:.2f} / {load[2]:.2f} (1 / 5 / 15 min; "
+          "timings are fair only on a quiet machine); latency at batch 1 in µs (p50 / p99); throughput at batch "
+          f"1024 in samples/s.\neager baseline: {EAGER_BASELINE}.\n")
     print("| family | ONNX size | eager p50 / p99 | ORT 1 thread p50 / p99 | ORT default p50 / p99 | speed-up (p50, best ORT) "
           "| eager /s | ORT 1 thread /s | ORT default /s | max rel. diff | rows over 1e-4 |")
     print("|---|---|---|---|---|---|---|---|---|---|---|")

@@ -4,6 +4,12 @@ onnxruntime (one intra-op thread and its default), with the thread settings and 
 Measured in-process on the run's own raw test inputs, after warm-up, repeating calls until a
 time budget is spent (at least 5 calls; slow eager pipelines get fewer repetitions, recorded
 as `reps`). `record_costs` merges the figures into the run's metrics.json and TensorBoard.
+
+A fair eager baseline: the eager pipeline is timed as a deployed user would call it, in-process,
+with every scikit-learn estimator inside it (forests included) predicting on one job
+(`n_jobs=1`): at batch 1, joblib's dispatch to a thread pool costs more than the trees
+themselves, and models/trees.py already predicts on one job after fitting. The metrics say so
+(`cost.eager_baseline`).
 """
 import json
 import logging
@@ -16,6 +22,7 @@ import torch
 
 from data.atomic import atomic_write_json
 from data.errors import InputError
+from data.progress import progress
 from export.onnx_predictor import OnnxPredictor
 from models.deployable import RegressionPipeline, load_pipeline
 
@@ -43,20 +50,46 @@ def throughput_per_s(call, batch, budget_s: float = 1.0) -> float:
     return count * len(batch) / (time.perf_counter() - start)
 
 
+EAGER_BASELINE = ("in-process numpy features + the fitted estimator; scikit-learn estimators (forests "
+                  "included) predict with n_jobs=1, torch with torch_threads threads")
+
+
+def single_job(model, seen=None) -> int:
+    """Set n_jobs=1 on every scikit-learn estimator reachable from `model` (its attributes, lists
+    and dicts of estimators: blends, k-fold copies, MultiOutputRegressor); returns how many had an
+    n_jobs setting."""
+    seen = set() if seen is None else seen
+    if id(model) in seen or isinstance(model, (str, bytes, int, float, np.ndarray)) or model is None:
+        return 0
+    seen.add(id(model))
+    count = 0
+    if hasattr(model, "get_params") and hasattr(model, "set_params") and "n_jobs" in getattr(model, "__dict__", {}):
+        model.n_jobs = 1
+        count += 1
+    children = model.values() if isinstance(model, dict) else model if isinstance(model, (list, tuple)) else \
+        getattr(model, "__dict__", {}).values()
+    for child in children:  # ours and scikit-learn's objects only (not torch modules' internals)
+        if isinstance(child, (list, tuple, dict)) or type(child).__module__.split(".")[0] in ("sklearn", "models"):
+            count += single_job(child, seen)
+    return count
+
+
 def measure(pipeline, model_path=None, budget_s: float = 1.0) -> dict:
     if pipeline.examples is None or len(pipeline.examples) == 0:
         return {}
     batch = np.resize(pipeline.examples, (1024,) + pipeline.examples.shape[1:])
     one = batch[:1]
+    n_single = single_job(getattr(pipeline, "model", None))
     runners = {"eager": pipeline.predict_raw}
     if model_path is not None and Path(model_path).is_file():
         for name, threads in (("onnx_1_thread", 1), ("onnx_default", 0)):
             predictor = OnnxPredictor(model_path, threads=threads)
             runners[name] = predictor.predict_array if isinstance(pipeline, RegressionPipeline) else predictor.predict_windows
-    cost = {"cores": os.cpu_count(), "torch_threads": torch.get_num_threads(),
+    cost = {"cores": os.cpu_count(), "torch_threads": torch.get_num_threads(), "eager_baseline": EAGER_BASELINE,
+            "eager_estimators_set_to_one_job": n_single,
             "onnx_threads": {"onnx_1_thread": 1, "onnx_default": "onnxruntime default (all cores)"},
             "latency_batch1_us": {}, "throughput_batch1024_per_s": {}}
-    for name, call in runners.items():
+    for name, call in progress(runners.items(), desc="latency", unit="runtimes"):
         cost["latency_batch1_us"][name] = latency_us(call, one, budget_s)
         cost["throughput_batch1024_per_s"][name] = throughput_per_s(call, batch, budget_s)
     if model_path is not None and Path(model_path).is_file():

@@ -81,7 +81,19 @@ def _labels(pairs: list[dict]) -> list[str]:
     def short(key):
         return key.lstrip("+~").split(".")[-1]
 
-    return [" ".join(f"{short(k)}={p[k]}" for k in varying if k in p) or "(all jobs alike)" for p in pairs]
+    def value(text):  # a search's trials differ in long floats: 4 significant digits tell them apart
+        try:
+            number = float(text)
+        except ValueError:
+            return text
+        return text if number.is_integer() else f"{number:.4g}"
+
+    def label(p, shorten):
+        return " ".join(f"{short(k)}={value(p[k]) if shorten else p[k]}" for k in varying if k in p) or "(all jobs alike)"
+
+    full, rounded = [label(p, False) for p in pairs], [label(p, True) for p in pairs]
+    # jobs alike but for the seed are grouped by label: rounding must never merge two configurations
+    return rounded if len(set(rounded)) == len(set(full)) else full
 
 
 def collect_jobs(sweep_dir) -> pd.DataFrame:
