@@ -9,11 +9,14 @@ def test_extra_trees_locates_presses_on_unseen_points(compose_config, tmp_path):
                           "model=extra_trees", "analysis.ablation=false"])
     test = run(cfg, tmp_path)["test"]
     print({t: round(test[t]["r2"], 4) for t in test})
-    # Measured R^2 0.939 (x) and 0.944 (y) at seed 0 (0.92-0.95 over seeds 0-2). Depth and
-    # pressure reach only ~0.5 on random positions: a press changes the sheet only near the
-    # probe, so its depth is confounded with its position and with the lab's +/- 1 C drift.
-    assert test["x_mm"]["r2"] > 0.9 and test["y_mm"]["r2"] > 0.9
-    assert test["depth_mm"]["r2"] > 0.3 and test["pressure_pa"]["r2"] > 0.3
+    # Measured R^2 0.900 (x), 0.911 (y), 0.898 (depth), 0.848 (pressure) at seed 0 (issue 11's
+    # scene: the film strain spreads over the gel's thickness and the default readout pairs
+    # electrodes across the sheet, so depth is far better observed than the ~0.5 before, while
+    # x and y fell from ~0.94; bench/fidelity.py --patterns: x 0.91 +/- 0.04, y 0.93 +/- 0.01
+    # over seeds 0-2 on 1,500 presses). Pressure is now its own target (stiffening, relaxation,
+    # the specimen's thickness map, load-cell noise), a little below depth.
+    assert test["x_mm"]["r2"] > 0.85 and test["y_mm"]["r2"] > 0.85
+    assert test["depth_mm"]["r2"] > 0.75 and test["pressure_pa"]["r2"] > 0.7
 
 
 @pytest.mark.slow
@@ -22,7 +25,7 @@ def test_resmlp_learns_depth_on_unseen_presses(compose_config, tmp_path):
                           "model=resmlp", "trainer.progress=false", "trainer.max_epochs=150", "analysis.ablation=false"])
     test = run(cfg, tmp_path)["test"]
     print({t: round(test[t]["r2"], 4) for t in test})
-    # Measured 0.996 (x), 0.996 (y), 0.866 (depth, pressure) at seed 0: the net untangles depth
-    # from position where the trees (~0.5) cannot.
+    # Measured 0.978 (x), 0.977 (y), 0.894 (depth), 0.845 (pressure) at seed 0 on issue 11's
+    # scene (0.996, 0.996, 0.866, 0.866 before it): the net untangles depth from position.
     assert test["x_mm"]["r2"] > 0.97 and test["y_mm"]["r2"] > 0.97
     assert test["depth_mm"]["r2"] > 0.75 and test["pressure_pa"]["r2"] > 0.75

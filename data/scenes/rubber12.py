@@ -12,19 +12,22 @@ position-depth pairs until `n_samples` presses; at each point the depths go up
 press-hold-retract. `random` draws positions and depths uniformly.
 
 Each channel is the two-terminal resistance between an electrode pair from a real solve of
-the sheet's current flow (data/physics/sheet_conduction.py); the default pattern measures each electrode
-against its clockwise neighbour, giving channels r_01_ohm ... r_12_ohm (r_01_norm ... after
-minmax_normalize, whose per-channel minimum and span the table keeps in `normalisation`).
+the sheet's current flow (data/physics/sheet_conduction.py); the default pattern `near_opposite`
+measures each electrode against the one five places clockwise (the twelve-channel pattern that
+comes closest to the lab's sensitivity map, docs/fidelity.md), giving channels r_01_ohm ...
+r_12_ohm (r_01_norm ... after minmax_normalize, whose per-channel minimum and span the table
+keeps in `normalisation`).
 
 Physics comes only from the listed effects (data/scenes/rubber12_effects.py).
 """
+import inspect
 from functools import lru_cache
 
 import numpy as np
 import pandas as pd
 from data.progress import progress
 
-from data.physics.sheet_conduction import PatchUpdateSolver, SheetGrid, SheetSolver, pair_resistance_ohm
+from data.physics.sheet_conduction import NearFarSolver, PatchUpdateSolver, SheetGrid, SheetSolver, pair_resistance_ohm
 from data.scenes.contract import random_generator_for, resolve_effects
 from data.errors import InputError
 from data.scenes.rubber12_effects import EFFECTS, FIELD_EFFECTS, READING_EFFECTS
@@ -45,17 +48,20 @@ def electrode_positions_mm(side_mm: float) -> np.ndarray:
 
 def measurement_pairs(pattern, n_electrodes: int = 12) -> np.ndarray:
     """0-based electrode pairs; `adjacent` = each electrode against its clockwise neighbour,
-    `opposite` = each electrode against the one across the sheet, or an explicit list of
-    1-based [i, j] pairs."""
-    if pattern == "adjacent":
+    `near_opposite` = each electrode against the one five places clockwise (12 channels that all
+    cross the sheet; the default, see docs/rubber12.md), `opposite` = each electrode against the
+    one across the sheet (6 channels, point-symmetric: a press and its image through the centre
+    read alike), or an explicit list of 1-based [i, j] pairs."""
+    if pattern in ("adjacent", "near_opposite"):
         first = np.arange(n_electrodes)
-        return np.column_stack([first, (first + 1) % n_electrodes])
+        step = 1 if pattern == "adjacent" else n_electrodes // 2 - 1
+        return np.column_stack([first, (first + step) % n_electrodes])
     if pattern == "opposite":
         first = np.arange(n_electrodes // 2)
         return np.column_stack([first, first + n_electrodes // 2])
     if isinstance(pattern, str):
         raise InputError(f"scene rubber12: unknown measurement pattern '{pattern}'; "
-                         "expected adjacent, opposite or a list of [i, j] electrode pairs (1-12)")
+                         "expected adjacent, near_opposite, opposite or a list of [i, j] electrode pairs (1-12)")
     pairs = np.asarray(list(map(list, pattern)), dtype=np.int64)
     if pairs.ndim != 2 or pairs.shape[1] != 2 or pairs.min() < 1 or pairs.max() > n_electrodes \
             or (pairs[:, 0] == pairs[:, 1]).any():
@@ -73,7 +79,8 @@ class Rubber12Scene:
                  side_mm=50.0, gel_thickness_mm=6.0, probe_radius_mm=3.5,
                  sheet_resistance_ohm_per_sq=1.0e4, electrode_width_mm=2.5, grid_nodes=33,
                  press_points_mm=(12.5, 25.0, 37.5), depth_range_mm=(0.3, 3.0), n_depth_steps=10,
-                 position_range_mm=(5.0, 45.0), sequence="up", measurement="adjacent", progress=True):
+                 position_range_mm=(5.0, 45.0), sequence="up", measurement="near_opposite",
+                 near_field_tolerance=0.01, progress=True):
         self.n_samples = n_samples
         self.protocol = protocol
         self.seed = seed
@@ -90,6 +97,7 @@ class Rubber12Scene:
         self.position_range_mm = position_range_mm
         self.sequence = sequence
         self.measurement = measurement
+        self.near_field_tolerance = near_field_tolerance
         self.progress = progress
 
     # -- protocol ---------------------------------------------------------------------------
@@ -102,6 +110,8 @@ class Rubber12Scene:
                              f"({self.gel_thickness_mm} mm), got {list(self.depth_range_mm)}")
         if self.protocol not in ("lab", "random"):
             raise InputError(f"scene.protocol must be 'lab' or 'random', got '{self.protocol}'")
+        if not 0.0 <= self.near_field_tolerance < 1.0:
+            raise InputError(f"scene.near_field_tolerance must be in [0, 1), got {self.near_field_tolerance}")
         if self.sequence not in ("up", "up_down"):
             raise InputError(f"scene.sequence must be 'up' or 'up_down', got '{self.sequence}'")
         if self.grid_nodes < 5 or (self.grid_nodes - 1) % 4 or self.sheet_resistance_ohm_per_sq <= 0:
@@ -138,7 +148,7 @@ class Rubber12Scene:
     # -- simulation -------------------------------------------------------------------------
     def _solvers(self):
         return _solvers(float(self.side_mm), int(self.grid_nodes), float(self.electrode_width_mm),
-                        float(self.sheet_resistance_ohm_per_sq))
+                        float(self.sheet_resistance_ohm_per_sq), float(self.near_field_tolerance))
 
     def generate(self) -> SensorTable:
         """Run the protocol: `n_samples` presses through the listed effects."""
@@ -156,7 +166,7 @@ class Rubber12Scene:
         pairs = measurement_pairs(self.measurement)
         solver, fast = self._solvers()
         geometry = {"probe_radius_mm": self.probe_radius_mm, "gel_thickness_mm": self.gel_thickness_mm,
-                    "spacing_mm": solver.grid.spacing_mm}
+                    "spacing_mm": solver.grid.spacing_mm, "side_mm": self.side_mm}
         node_xy = solver.grid.node_xy_mm
         base = 1.0 / self.sheet_resistance_ohm_per_sq
 
@@ -168,8 +178,13 @@ class Rubber12Scene:
             part = slice(start, min(start + chunk, n))
             state = {"x_mm": x[part], "y_mm": y[part], "depth_mm": depth[part],
                      "unloading": unloading[part], "node_xy_mm": node_xy, "geometry": geometry}
-            for _, fn, params in field_effects:
-                fn(state, **params)
+            for name, fn, params in field_effects:
+                # A field effect that draws (a per-sensor property) gets its own generator, the
+                # same one in every chunk, so it draws the same sensor each time.
+                if "rng" in inspect.signature(fn).parameters:
+                    fn(state, random_generator_for(self.seed, name), **params)
+                else:
+                    fn(state, **params)
             scale = np.broadcast_to(state.get("conductance_scale", 1.0), (len(state["x_mm"]), len(node_xy)))
             z = fast.transfer_resistance(base * scale)
             readings[part] = pair_resistance_ohm(z, pairs)
@@ -178,10 +193,12 @@ class Rubber12Scene:
             bar.update(len(state["x_mm"]))
         bar.close()
 
-        state = {"resistance_ohm": readings, "pairs": pairs,
+        state = {"resistance_ohm": readings, "pairs": pairs, "force_n": force, "pressure_pa": pressure,
+                 "probe_radius_mm": self.probe_radius_mm,
                  "channels": [f"r_{k + 1:02d}_ohm" for k in range(len(pairs))]}
         for name, fn, params in reading_effects:
             fn(state, random_generator_for(self.seed, name), **params)
+        force, pressure = state["force_n"], state["pressure_pa"]
 
         channels = state["channels"]  # r_XX_norm after minmax_normalize
         frame = pd.DataFrame(state["resistance_ohm"], columns=channels)
@@ -198,9 +215,11 @@ class Rubber12Scene:
 
 
 @lru_cache(maxsize=4)
-def _solvers(side_mm, grid_nodes, electrode_width_mm, sheet_resistance_ohm_per_sq):
-    """The exact sparse solver and its patch-update companion for one geometry, built once per
-    process (the dense baseline inverse takes ~0.2 s at 41 x 41 nodes)."""
+def _solvers(side_mm, grid_nodes, electrode_width_mm, sheet_resistance_ohm_per_sq, near_field_tolerance):
+    """The exact sparse solver and the fast one for one geometry, built once per process (the
+    dense baseline inverse takes ~0.2 s at 41 x 41 nodes). The fast one updates the near field
+    exactly (Woodbury) and adds the rest of a press's change to first order (NearFarSolver);
+    `near_field_tolerance` 0 makes it exact."""
     grid = SheetGrid(side_mm, grid_nodes, electrode_positions_mm(side_mm), electrode_width_mm)
     solver = SheetSolver(grid)
-    return solver, PatchUpdateSolver(solver, 1.0 / sheet_resistance_ohm_per_sq)
+    return solver, NearFarSolver(PatchUpdateSolver(solver, 1.0 / sheet_resistance_ohm_per_sq), near_field_tolerance)

@@ -1,0 +1,138 @@
+"""Fidelity table: what each seed paper observed on its sensor, measured on the scene.
+
+    .venv/bin/python bench/fidelity.py                    # rubber12, markdown table
+    .venv/bin/python bench/fidelity.py --json             # the same rows as JSON
+    .venv/bin/python bench/fidelity.py --scene rubber12 --config rubber12_lab --repeats 50
+    .venv/bin/python bench/fidelity.py scene.measurement=opposite     # any Hydra override
+    .venv/bin/python bench/fidelity.py --patterns          # which readout reproduces the sensitivity map
+
+The observations are the notes file's (../shared/notes/seed-observations.md); one check per
+observation lives in bench/fidelity_checks.py, which says how each is measured and judged.
+The scene is the composed Hydra config `scene=<config>` (default: the scene's default config).
+"""
+import argparse
+import json
+import sys
+import time
+from dataclasses import asdict
+from pathlib import Path
+
+from hydra import compose, initialize_config_dir
+from omegaconf import OmegaConf
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import numpy as np  # noqa: E402
+from sklearn.ensemble import ExtraTreesRegressor  # noqa: E402
+from sklearn.metrics import r2_score  # noqa: E402
+
+from bench.fidelity_checks import (  # noqa: E402
+    CHECKS,
+    CORNERS,
+    SceneProbe,
+    _sensitivity_per_mm,
+    centre_widest_range,
+    corners_least_sensitive,
+    extra_trees_r2,
+    mirror_ambiguity_worst_at_edges,
+    run_checks,
+)
+from data.features import FEATURE_GROUPS, compute_features  # noqa: E402
+
+PROBES = {"rubber12": SceneProbe}
+
+# rubber12 readout patterns compared by --patterns: named ones and electrode e_i against e_i+k.
+PATTERNS = {"adjacent": "adjacent", "i vs i+3": [[i, (i + 2) % 12 + 1] for i in range(1, 13)],
+            "i vs i+4": [[i, (i + 3) % 12 + 1] for i in range(1, 13)], "near_opposite (i vs i+5)": "near_opposite",
+            "opposite (i vs i+6)": "opposite"}
+
+
+def scene_params(config: str, overrides=()) -> dict:
+    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+        composed = compose("config", overrides=[f"scene={config}", "seed=0", *overrides])
+    return OmegaConf.to_container(composed.scene, resolve=True)
+
+
+def markdown(rows) -> str:
+    verdict = {True: "holds", False: "does not hold", None: "not measured"}
+    lines = ["| # | paper's observation | paper's number | scene's measurement | tolerance | verdict |",
+             "|---|---|---|---|---|---|"]
+    for row in rows:
+        m = row.measured
+        lines.append(f"| {row.number} | {row.statement} | {row.paper} | {m.value} | {m.tolerance or '—'} | "
+                     f"{verdict[m.holds]} |")
+    return "\n".join(lines)
+
+
+def compare_patterns(config: str, overrides, repeats: int) -> str:
+    """The sensitivity rows (4, 5), the mirror row (6) and the forest's x, y R^2 (11) for each
+    readout pattern on the same scene."""
+    lines = [("| readout | channels | sensitivity per mm: corners / edge mid / centre (row 4) | "
+              "P5 span / best span (row 5) | mirror ambiguity edge / centre (row 6) | R² x, y (row 11) | "
+              f"R² x / y / depth, random presses ({RANDOM_PRESSES}, seeds 0-2, mean ± sd) |"),
+             "|---|---|---|---|---|---|---|"]
+    params = scene_params(config, overrides)
+    for name, pattern in PATTERNS.items():
+        probe = SceneProbe({**params, "measurement": pattern}, repeats=repeats)
+        four, five = corners_least_sensitive(probe).numbers, centre_widest_range(probe).numbers
+        six, r2 = mirror_ambiguity_worst_at_edges(probe).numbers, extra_trees_r2(probe).numbers["r2"]
+        corner_mean = _mean_corners(probe)
+        lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {100 * corner_mean:.2f} / "
+                     f"{100 * four['edge_mean']:.2f} / {100 * four['centre']:.2f} % | "
+                     f"{five['range'][4] / max(five['range']):.2f} | {six['edge']:.3f} / {six['centre']:.3f} | "
+                     f"{r2[0]:.3f}, {r2[1]:.3f} | {_random_press_r2(params, pattern)} |")
+    return "\n".join(lines)
+
+
+RANDOM_PRESSES = 1500
+
+
+def _random_press_r2(params, pattern) -> str:
+    """Extra trees (100, physics features) on uniformly drawn presses, random 15 % hold-out, three
+    seeds: how well a pattern localises away from the lab's nine points."""
+    scores = []
+    for seed in range(3):
+        probe = SceneProbe({**params, "measurement": pattern, "seed": seed})
+        table = probe.scene(n_samples=RANDOM_PRESSES, protocol="random").generate()
+        features, targets = compute_features(table.channels, FEATURE_GROUPS), table.targets
+        test = np.random.default_rng(seed).permutation(len(targets))[: int(0.15 * len(targets))]
+        train = np.setdiff1d(np.arange(len(targets)), test)
+        forest = ExtraTreesRegressor(n_estimators=100, random_state=seed, n_jobs=1).fit(features[train], targets[train])
+        scores.append(r2_score(targets[test], forest.predict(features[test]), multioutput="raw_values")[:3])
+    mean, sd = np.mean(scores, axis=0), np.std(scores, axis=0, ddof=1)
+    return " / ".join(f"{m:.3f} ± {s:.3f}" for m, s in zip(mean, sd))
+
+
+def _mean_corners(probe) -> float:
+    return float(_sensitivity_per_mm(probe)[CORNERS].mean())
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--scene", default="rubber12", choices=[s for s in CHECKS if s in PROBES])
+    parser.add_argument("--config", default=None, help="scene config to compose (default: --scene)")
+    parser.add_argument("--repeats", type=int, default=20, help="identical presses per point for noise figures")
+    parser.add_argument("--json", action="store_true")
+    parser.add_argument("--patterns", action="store_true", help="rubber12: compare readout patterns instead")
+    parser.add_argument("overrides", nargs="*", help="Hydra overrides, e.g. scene.measurement=opposite")
+    args = parser.parse_args(argv)
+
+    config = args.config or args.scene
+    start = time.perf_counter()
+    if args.patterns:
+        print(compare_patterns(config, args.overrides, args.repeats))
+        return
+    rows = run_checks(args.scene, PROBES[args.scene](scene_params(config, args.overrides), repeats=args.repeats))
+    if args.json:
+        print(json.dumps([asdict(row) for row in rows], indent=1))
+        return
+    held = sum(row.measured.holds is True for row in rows)
+    measured = sum(row.measured.holds is not None for row in rows)
+    print(f"## {args.scene} (scene={config}; {held} of {measured} measured rows hold; "
+          f"{time.perf_counter() - start:.1f} s)\n")
+    print(markdown(rows))
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,63 @@
+"""The fidelity table's rows that hold for rubber12 (bench/fidelity.py, docs/fidelity.md) keep
+holding, with margin: each test measures one observation of the seed paper on the scene the way
+the table does (bench/fidelity_checks.py), with fewer repeats, and asserts it clear of the
+table's tolerance. Rows that do not hold are not asserted (the table records them and why)."""
+import json
+
+import pytest
+
+from bench import fidelity
+from bench import fidelity_checks as checks
+from bench.fidelity_checks import CHECKS, SceneProbe
+
+
+@pytest.fixture(scope="module")
+def probe():
+    return SceneProbe(fidelity.scene_params("rubber12"), repeats=8)
+
+
+def test_every_observation_of_the_notes_has_a_row():
+    numbers = [fn.observation[1] for fn in CHECKS["rubber12"]]
+    assert [n.rstrip("ab") for n in numbers] == ["1", "2", "3", "3", "4", "5", "6", "7", "8", "9", "10",
+                                                 "11", "12", "13"]
+    assert CHECKS["fingertip"] == []        # seed 003's rows go here
+
+
+def test_repeat_variation_stays_below_the_labs(probe):
+    cv = checks.repeat_cv(probe).numbers["max_cv"]
+    assert 0.0 < cv < 0.8 * 0.023                      # table: 0.28 %
+
+
+def test_resistance_is_nonlinear_in_depth(probe):
+    assert checks.nonlinear_depth(probe).numbers["median_departure"] > 0.06   # table: 9 %, tolerance 5 %
+
+
+def test_pressure_is_not_a_copy_of_depth(probe):
+    assert checks.pressure_is_not_depth(probe).numbers["corr"] < 0.985        # table: 0.974, tolerance 0.99
+
+
+def test_mirror_ambiguity_is_worst_near_an_edge_midpoint(probe):
+    numbers = checks.mirror_ambiguity_worst_at_edges(probe).numbers
+    assert numbers["edge"] < 0.5 * numbers["centre"]                           # table: 0.016 vs 0.136
+
+
+def test_depth_is_weakly_observable_at_small_depths(probe):
+    assert checks.depth_weak_at_small_depths(probe).numbers["shallow_ratio"] < 0.7   # table: 0.38
+
+
+def test_pressure_shows_over_many_channels(probe):
+    assert checks.pressure_is_aggregate(probe).numbers["effective_channels"] > 4.0   # table: 9.4, tolerance 3
+
+
+def test_incremental_sensitivity_falls_at_high_force(probe):
+    assert checks.saturation_at_high_force(probe).numbers["ratio"] < 0.8       # table: 0.49, tolerance 1
+
+
+def test_table_prints_every_row_with_a_verdict(probe, capsys):
+    rows = [checks.Row("rubber12", *fn.observation[1:], fn(probe)) for fn in CHECKS["rubber12"]
+            if fn not in (checks.extra_trees_r2, checks.uncertainty_pattern)]   # the forest rows are slow
+    text = fidelity.markdown(rows)
+    assert text.count("\n") == len(rows) + 1
+    verdicts = [line.rsplit("|", 2)[-2].strip() for line in text.splitlines()[2:]]
+    assert set(verdicts) <= {"holds", "does not hold", "not measured"} and "holds" in verdicts
+    json.dumps([fidelity.asdict(row) for row in rows])   # the --json output is serialisable
