@@ -145,6 +145,37 @@ def load_frames(path: str | Path, rows: int, cols: int, pitch_mm: float = 10.0, 
                          {"source": "file", "path": str(path)})
 
 
+def frames_from_lines(lines, rows: int, cols: int, source: str = "stdin"):
+    """Frames from text lines as the firmware streams them (one comma-separated row-major frame
+    per line; blank lines and # comments skipped), one at a time: a serial port piped into
+    standard input. A line with the wrong number of cells or a cell that is not a finite number
+    is an InputError naming the line."""
+    n_cells = rows * cols
+    for number, line in enumerate(lines, start=1):
+        text = line.split("#", 1)[0].strip()
+        if not text:
+            continue
+        cells = text.split(",")
+        if len(cells) != n_cells:
+            raise InputError(f"{source}: line {number} has {len(cells)} cells, expected rows x cols = {n_cells}")
+        try:
+            frame = np.array([float(cell) for cell in cells])
+        except ValueError:
+            bad = next(c for c in cells if not _is_number(c))
+            raise InputError(f"{source}: line {number}, a cell is not a number: {bad.strip()!r}") from None
+        if not np.isfinite(frame).all():
+            raise InputError(f"{source}: line {number}, cell {int(np.argmin(np.isfinite(frame)))} is not finite")
+        yield frame.reshape(rows, cols)
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+        return True
+    except ValueError:
+        return False
+
+
 def save_frames_csv(stream: ContactStream, path: str | Path) -> Path:
     """Write frames as the firmware streams them: one comma-separated row-major line per frame."""
     path = Path(path)

@@ -1,5 +1,6 @@
 """The capacitive_tracking study end to end, tiny: a short simulated stream (and the same frames
 as a user's CSV recording), ours beside the paper's tracker, every artefact written."""
+import io
 import json
 
 import numpy as np
@@ -88,3 +89,26 @@ def test_a_saved_window_force_model_serves_the_tracker(compose_config, tmp_path)
                         "scene.n_repetitions=3", "export=none", "extras=quick"]), cells_run)
     with pytest.raises(InstantiationException, match="3x3 window"):
         run(compose_config(TINY + [f"study.force_model={cells_run}"]), tmp_path / "bad")
+
+
+def test_standard_input_is_tracked_line_by_line(compose_config, tmp_path, monkeypatch, capsys):
+    """`study.recording.path=-`: contacts are printed as the frames arrive; the files at the end
+    are those of the same frames given as a file."""
+    cfg = compose_config(TINY)
+    stream, _ = load_stream(cfg, None)
+    path = save_frames_csv(stream, tmp_path / "frames.csv")
+    monkeypatch.setattr("sys.stdin", io.StringIO(path.read_text()))
+    run(compose_config(TINY + ["study.recording.path=-", "study.recording.n_rest_frames=30"]), tmp_path / "live")
+    printed = [line for line in capsys.readouterr().out.splitlines() if line and line[0].isdigit()]
+    from_file = run(compose_config(TINY + [f"study.recording.path={path}", "study.recording.n_rest_frames=30"]),
+                    tmp_path / "file")
+    written = pd.read_csv(tmp_path / "file" / "contacts.csv")
+    assert len(printed) == len(written) == from_file["trackers"]["ours"]["contacts_reported"] > 0
+    assert [int(line.split(",")[1]) for line in printed] == written.id.tolist()
+    assert pd.read_csv(tmp_path / "live" / "contacts.csv").equals(written)
+
+
+def test_a_bad_line_on_standard_input_names_it(compose_config, tmp_path, monkeypatch):
+    monkeypatch.setattr("sys.stdin", io.StringIO("1,2,3\n"))
+    with pytest.raises(InstantiationException, match="stdin: line 1 has 3 cells, expected rows x cols = 36"):
+        run(compose_config(TINY + ["study.recording.path=-"]), tmp_path / "bad")

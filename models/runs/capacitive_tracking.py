@@ -14,6 +14,13 @@ contacts.csv (the first tracker's contacts: frame, id, x_mm, y_mm, cells, mean_l
 force_n) and contacts_<name>.csv for the others, TensorBoard scalars, contacts.gif (heatmap with
 ids, a time-series panel per contact, as the paper's Fig. 13-14) and contacts.png (one frame).
 
+Standard input line by line (`study.recording.path=-`, a serial stream piped in): the first
+tracker prints each frame's contacts as CSV lines on standard output as the frame arrives
+(frame, id, x_mm, y_mm, force_n); at the end of the input the run writes the same files as for a
+recording file:
+    cat /dev/ttyACM0 | python train.py experiment=capacitive_tracking study.recording.path=- \
+        study.recording.rows=12 study.recording.cols=21
+
 Force per contact comes from the regression pipeline's fitted model (`force_model: pipeline`):
 the configured `model` (the experiment sets the paper's linear regression; any `model=` works)
 is fitted by the shared pipeline (datamodule, grouped split, report metrics) on the scene's
@@ -23,6 +30,7 @@ each contact's window through that same fitted pipeline. Or `force_model: <run f
 pipeline.pkl>` of such a run (`python train.py experiment=capacitive_force hydra.mode=RUN
 scene.characterisation_channels=window`), or `none`.
 """
+import sys
 import time
 from pathlib import Path
 
@@ -32,7 +40,7 @@ from hydra.utils import get_object, instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from data.atomic import atomic_write_json, atomic_write_text
-from data.contact_streams import ContactStream, load_frames
+from data.contact_streams import ContactStream, check_grid, frames_from_lines, load_frames
 from data.contact_windows import window_channel_names
 from data.errors import InputError
 from models.contact_tracker import ContactTracker
@@ -94,12 +102,40 @@ def force_reader(pipeline):
     return lambda windows: pipeline.predict_raw(windows)[0][:, column]
 
 
+def make_tracker(rows: int, cols: int, pitch_mm: float, params: dict, force_pipeline) -> ContactTracker:
+    """A tracker with the study's parameters, reading force through the pipeline when given one."""
+    if force_pipeline is not None:
+        params = {**params, "force_model": force_reader(force_pipeline), "force_feature": "window"}
+    return ContactTracker(rows=rows, cols=cols, pitch_mm=pitch_mm, **params)
+
+
+def track_live(lines, recording: dict, params: dict, force_pipeline, out) -> ContactStream:
+    """Standard input line by line (a serial stream piped in): the first n_rest_frames frames fit
+    the tracker, then every frame's contacts are written to `out` as CSV lines (frame, id, x_mm,
+    y_mm, force_n) as it arrives. Returns every frame read, for the files written at the end."""
+    rows, cols, n_rest = int(recording["rows"]), int(recording["cols"]), int(recording["n_rest_frames"])
+    pitch_mm, rate_hz = float(recording["pitch_mm"]), float(recording["frame_rate_hz"])
+    check_grid(rows, cols, pitch_mm, rate_hz, "stdin")
+    tracker, frames = make_tracker(rows, cols, pitch_mm, params, force_pipeline), []
+    print("frame,id,x_mm,y_mm,force_n", file=out, flush=True)
+    for frame in frames_from_lines(lines, rows, cols):
+        frames.append(frame)
+        if len(frames) == n_rest:
+            tracker.fit(np.stack(frames))
+        elif len(frames) > n_rest:
+            contacts = tracker.update(frame)
+            for i, x, y, f in zip(contacts.ids.tolist(), contacts.x_mm.tolist(), contacts.y_mm.tolist(),
+                                  contacts.force_n.tolist()):
+                print(f"{len(frames) - 1},{i},{x:.2f},{y:.2f},{f:.3f}", file=out, flush=True)
+    if len(frames) < n_rest:
+        raise InputError(f"stdin: {len(frames)} frames, fewer than the {n_rest} rest frames needed for a baseline")
+    return ContactStream(np.stack(frames), rate_hz, pitch_mm, n_rest, None, {"source": "stdin"})
+
+
 def track(stream: ContactStream, params: dict, force_pipeline, keep_images: bool):
     """Fit on the rest frames, update frame by frame (force from the pipeline, given one);
     returns (contacts with stream frame numbers, timing, images)."""
-    if force_pipeline is not None:
-        params = {**params, "force_model": force_reader(force_pipeline), "force_feature": "window"}
-    tracker = ContactTracker(rows=stream.rows, cols=stream.cols, pitch_mm=stream.pitch_mm, **params)
+    tracker = make_tracker(stream.rows, stream.cols, stream.pitch_mm, params, force_pipeline)
     tracker.fit(stream.frames[:stream.n_rest_frames])
     live = stream.frames[stream.n_rest_frames:]
     records, elapsed_ns = [], np.zeros(len(live))
@@ -139,13 +175,17 @@ def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_for
     animation = dict(animation or {})
     if not trackers:
         raise InputError("capacitive_tracking: study.trackers lists no tracker")
-    stream, scene = load_stream(cfg, recording)
-    radius = float(match_radius_mm) if match_radius_mm is not None else stream.pitch_mm
+    live = bool(recording) and recording.get("path") == "-"   # standard input, line by line
+    stream, scene = (None, None) if live else load_stream(cfg, recording)
     force_pipeline, force_info = None, None
     if force_model == "pipeline" and scene is not None:
         force_pipeline, force_info = fit_force_pipeline(cfg, scene, force_repetitions)
     elif force_model not in (None, "none", "pipeline"):
         force_pipeline, force_info = load_force_pipeline(force_model)
+    primary = next(iter(trackers))
+    if live:
+        stream = track_live(sys.stdin, recording, dict(trackers[primary] or {}), force_pipeline, sys.stdout)
+    radius = float(match_radius_mm) if match_radius_mm is not None else stream.pitch_mm
     metrics = {"stream": {"source": stream.description.get("source", "scene"), "frames": stream.n_frames,
                           "rest_frames": stream.n_rest_frames, "grid": [stream.rows, stream.cols],
                           "pitch_mm": stream.pitch_mm, "frame_rate_hz": stream.frame_rate_hz,
@@ -154,7 +194,6 @@ def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_for
                if stream.truth is not None else None,
                "force_model": force_info,
                "trackers": {}}
-    primary = next(iter(trackers))
     tables, images = {}, None
     for name, params in trackers.items():
         table, timing, frames = track(stream, dict(params or {}), force_pipeline, keep_images=name == primary)
