@@ -6,6 +6,12 @@ interval assumes Gaussian, well-estimated errors; split-conformal calibration (V
 the normalised scores |y - mean| / sigma and their ceil((n + 1)(1 - alpha)) / n empirical
 quantile q, per target; then mean +/- q sigma covers a new point with probability >= 1 - alpha
 (exchangeable data). Too few calibration rows for the quantile is a clear error.
+
+When rows come in recordings that share effects (a drift walk, one unloaded frame), rows are
+not exchangeable but whole recordings are: pool the scores of several recordings for q, and
+check the coverage a new recording gets by leaving each recording out in turn
+(`leave_one_group_out_coverage`; Barber et al., Ann. Stat. 49, 2021, jackknife+ idea at the
+group level) - the spread over recordings is what one test recording's coverage varies by.
 """
 import numpy as np
 
@@ -29,6 +35,17 @@ def normalised_scores(y, mean, sigma) -> np.ndarray:
     """|y - mean| / sigma, with sigma floored so a zero-spread prediction cannot divide by zero."""
     sigma = np.maximum(np.asarray(sigma, dtype=np.float64), 1e-12 * (np.abs(mean).max() + 1.0))
     return np.abs(np.asarray(y) - mean) / sigma
+
+
+def leave_one_group_out_coverage(scores, groups, alpha: float = 0.05) -> np.ndarray:
+    """(n_groups, n_targets): the share of each group's scores within the conformal quantile
+    of the other groups' scores (needs two groups or more)."""
+    scores, groups = np.asarray(scores, dtype=np.float64), np.asarray(groups)
+    names = np.unique(groups)
+    if len(names) < 2:
+        raise InputError(f"leave-one-group-out coverage needs at least 2 groups, got {len(names)}")
+    return np.array([(scores[groups == g] <= conformal_quantile(scores[groups != g], alpha)).mean(axis=0)
+                     for g in names])
 
 
 def coverage(y, lower, upper) -> np.ndarray:

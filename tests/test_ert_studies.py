@@ -55,7 +55,8 @@ def test_learned_study_compares_with_tikhonov_on_the_same_presses(compose_config
     assert models == {"tikhonov", "extra_trees", "resmlp", "blend"}
     assert metrics["features"] == "tikhonov_peak_window"
     table = (tmp_path / "learned_vs_tikhonov.csv").read_text()
-    assert "coverage_force" in table
+    assert "coverage_force" in table and "loo_coverage_force" in table   # 5 calibration recordings, left out in turn
+    assert metrics["n_conformal_recordings"] == 5
 
 
 

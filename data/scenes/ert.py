@@ -25,6 +25,10 @@ holds several independent drift walks, like the separate test recording it is sc
 Targets: x_mm, y_mm (the contact, or the mid-point of two), force_n (total); extra columns
 give the second contact, the mean pressure and the recording. One group per press, or per
 recording when `recording_presses` is set.
+`session` (0 = the first) numbers repeated sessions of the same protocol on the same sensor:
+each session draws its own noise, hysteresis, drift (and random presses), so session 1 of
+`calibration` is a recording independent of session 0, which the Tikhonov reconstruction is
+fitted on. Session 0 keeps the streams' plain names.
 """
 from functools import lru_cache
 from itertools import combinations
@@ -160,7 +164,7 @@ class ERTScene:
                  two_point_locations_mm=((50.0, 100.0), (100.0, 30.0), (100.0, 100.0)),
                  distances_mm=(20, 25, 30, 35, 40, 45, 50, 55, 60), two_point_force_n=8.0, n_repeats=10,
                  n_samples=2000, position_range_mm=(10.0, 190.0), two_contact_probability=0.0,
-                 recording_presses=None):
+                 recording_presses=None, session=0):
         self.name = name
         self.electrodes_mm = electrodes_mm
         self.protocol = protocol
@@ -187,6 +191,7 @@ class ERTScene:
         self.position_range_mm = position_range_mm
         self.two_contact_probability = two_contact_probability
         self.recording_presses = recording_presses
+        self.session = session
 
     # -- geometry ---------------------------------------------------------------------------------
     def _check(self):
@@ -205,10 +210,18 @@ class ERTScene:
             raise InputError(f"scene ert: need 0 <= force_range_n low <= high, indenter_diameter_mm > 0, "
                              f"foam_thickness_mm >= 0; got {list(self.force_range_n)}, "
                              f"{self.indenter_diameter_mm}, {self.foam_thickness_mm}")
+        if int(self.session) < 0:
+            raise InputError(f"scene ert: session must be >= 0, got {self.session}")
         if self.recording_presses is not None and int(self.recording_presses) < 1:
             raise InputError(f"scene ert: recording_presses must be >= 1 or null, got {self.recording_presses}")
         if self.electrodes_mm is None or np.asarray(self.electrodes_mm).ndim != 2 or np.asarray(self.electrodes_mm).shape[1] != 2:
             raise InputError("scene ert: electrodes_mm must be a list of [x, y] electrode positions in mm")
+
+    def _stream(self, name: str):
+        """The generator of one per-recording random source: its name carries the protocol and,
+        past session 0, the session, so repeated recordings draw independently."""
+        session = f"session{int(self.session)}/" if int(self.session) else ""
+        return random_generator_for(self.seed, f"{session}{name}")
 
     @property
     def n_electrodes(self) -> int:
@@ -271,7 +284,7 @@ class ERTScene:
             return contacts, {k: np.asarray(v) for k, v in extra.items()}
         if self.protocol == "blank":
             return np.column_stack([np.full((self.n_samples, 2), self.side_mm / 2), np.zeros(self.n_samples)])[:, None, :], {}
-        rng = random_generator_for(self.seed, "protocol")
+        rng = self._stream("protocol")
         lo, hi = self.position_range_mm
         n = self.n_samples
         contacts = np.zeros((n, 2, 3))
@@ -310,7 +323,7 @@ class ERTScene:
         for name, fn, params in effects:
             if name in PRESS_EFFECTS and name != "foam_spread":
                 if name in ("hysteresis",):
-                    fn(press, random_generator_for(self.seed, f"{self.protocol}/{name}"), **params)
+                    fn(press, self._stream(f"{self.protocol}/{name}"), **params)
                 else:
                     fn(press, **params)
         node_conductance = base_nodes[None, :] * (press["patch_conductance_factor"] @ node_patch.T)
@@ -346,7 +359,7 @@ class ERTScene:
                    "patch_jacobian": lambda: self.patch_jacobian(sensor)}
         for name, fn, params in effects:
             if name in READING_EFFECTS:
-                fn(reading, random_generator_for(self.seed, f"{self.protocol}/{name}"), **params)
+                fn(reading, self._stream(f"{self.protocol}/{name}"), **params)
 
         channels = channel_names(injections, measurements)
         frame = pd.DataFrame(reading["voltage_v"] - reading["baseline_v"][recording], columns=channels)
