@@ -113,13 +113,14 @@ class _Track:
     """A contact followed over frames (ours). `memory`: contacts merged into this one, as
     (id, birth, x, y, vx, vy, frame) at the moment they merged, this track's own state included.
     `path`: its last HISTORY_FRAMES (frame, x, y), for the velocity a merge remembers."""
-    __slots__ = ("id", "birth", "cells", "size", "x", "y", "vx", "vy", "missing", "memory", "path", "member_xy", "member_path")
+    __slots__ = ("id", "birth", "cells", "size", "x", "y", "vx", "vy", "missing", "memory", "path", "member_xy", "member_path", "member_still")
 
     def __init__(self, track_id, birth, cells, x, y, size, frame=None):
         self.id, self.birth, self.cells, self.size = track_id, birth, cells, size
         self.x, self.y, self.vx, self.vy, self.missing, self.memory = x, y, 0.0, 0.0, 0, []
         self.member_xy = None  # while merged: each member's position in the region (k-means), memory's order
-        self.member_path = collections.deque(maxlen=SETTLE_FRAMES)  # ... over the last frames
+        self.member_path = collections.deque(maxlen=SETTLE_FRAMES)  # ... over the last frames; None: settled
+        self.member_still = 0  # frames in a row the members have been still
         self.path = collections.deque([(birth if frame is None else frame, x, y)], maxlen=HISTORY_FRAMES)
 
     def snapshot(self, frame):
@@ -610,7 +611,7 @@ class ContactTracker(BaseEstimator):
             host.memory.append(guest.snapshot(self.frame_index_))
             host.memory.extend(guest.memory[1:] if guest.memory else [])
             host.member_xy = None
-            host.member_path.clear()
+            host.member_path, host.member_still = collections.deque(maxlen=SETTLE_FRAMES), 0
             merged.add(younger)
             det_of.pop(m, None)
             det_of[older] = d
@@ -648,7 +649,7 @@ class ContactTracker(BaseEstimator):
                 back.add(snap[0])
             parent.memory = [s for s in parent.memory if s[0] not in back]
             parent.member_xy = None
-            parent.member_path.clear()
+            parent.member_path, parent.member_still = collections.deque(maxlen=SETTLE_FRAMES), 0
             if len(parent.memory) == 1:  # only its own snapshot left: nothing merged any more
                 parent.memory = []
         # update matched tracks; age the others; new ids for what is left
@@ -708,7 +709,11 @@ class ContactTracker(BaseEstimator):
         region, whose k-means halves say nothing about who is who. Members that have all moved
         less than SETTLE_MM over the last SETTLE_FRAMES frames are a merge that stays (two
         touches pressed into one, the k-means only halving it): the region is then reported at
-        its own centroid, still with the older id."""
+        its own centroid, still with the older id; still for three times as long, the merge is
+        settled until the region splits (no k-means on it any more: a merge that stays costs
+        nothing per frame)."""
+        if track.member_path is None:  # settled: one touch until the region splits
+            return
         cells = np.unique(self.neighbourhood_[region_cells])
         weight = self.above_load_[cells]
         cells, weight = cells[weight > 0], weight[weight > 0]
@@ -728,7 +733,13 @@ class ContactTracker(BaseEstimator):
         track.member_path.append(centres.copy())
         path = track.member_path
         if len(path) == path.maxlen and MAX(np.hypot(*(path[-1] - path[0]).T)) < SETTLE_MM:
-            return  # the members stopped moving: a merge that stays (one touch now), at the region's centroid
+            # the members stopped moving: a merge that stays (one touch now), at the region's centroid;
+            # still for three times as long, it is settled for good (no k-means until the split)
+            track.member_still += 1
+            if track.member_still >= 2 * SETTLE_FRAMES:
+                track.member_path = None
+            return
+        track.member_still = 0
         own = [s[0] for s in track.memory].index(track.id)
         if total[own] > 0:
             xy_mm[:] = centres[own]
