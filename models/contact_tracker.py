@@ -58,6 +58,7 @@ from sklearn.base import BaseEstimator
 
 from data.contact_windows import window_indices
 from data.errors import InputError
+from models.frame_contacts import FrameContacts
 from models.otsu_threshold import otsu_threshold
 from models.paper_contact_tracking import paper_track_clusters
 
@@ -68,45 +69,6 @@ FORCE_FEATURES = ("peak", "sum", "mean", "window")
 SETTLE_FRAMES, SETTLE_MM = 10, 2.0  # merged members that moved less than this over these frames are one contact
 HISTORY_FRAMES = 10  # centroids kept per track for the velocity a merge remembers (1/6 s at 60 frames/s)
 MAX, MIN, ALL, ANY = np.maximum.reduce, np.minimum.reduce, np.logical_and.reduce, np.logical_or.reduce
-
-
-class FrameContacts:
-    """One frame's contacts: parallel arrays, one entry per contact; the id image and the areas
-    are computed when asked for (most applications read centroids and ids only). A plain class
-    with slots: built once per frame, where a frozen dataclass costs a few microseconds more.
-
-    frame: frames updated since fit, from 0; ids: stable contact ids (int64), unique within the
-    frame; x_mm, y_mm: load-weighted centroid (3 x 3 cells around the peak) from the grid's
-    corner, column and row direction; n_cells: cells in the contact; mean_load, peak_load: mean
-    and largest reading above the rest mean over its cells (RMC); force_n: from the force
-    model, NaN without one; cell_contact: per cell (row-major, one padding entry at the end) 0
-    or the contact's index + 1; grid: (rows, cols, pitch_mm)."""
-    __slots__ = ("frame", "ids", "x_mm", "y_mm", "n_cells", "mean_load", "peak_load", "force_n", "cell_contact", "grid")
-
-    def __init__(self, frame, ids, x_mm, y_mm, n_cells, mean_load, peak_load, force_n, cell_contact, grid):
-        self.frame, self.ids, self.x_mm, self.y_mm, self.n_cells = frame, ids, x_mm, y_mm, n_cells
-        self.mean_load, self.peak_load, self.force_n, self.cell_contact, self.grid = \
-            mean_load, peak_load, force_n, cell_contact, grid
-
-    @property
-    def labels(self) -> np.ndarray:
-        """(rows, cols) int: 0 background, else the contact id on its cells."""
-        rows, cols, _ = self.grid
-        return np.r_[0, self.ids][self.cell_contact[:-1]].reshape(rows, cols)
-
-    @property
-    def area_mm2(self) -> np.ndarray:
-        """n_cells * pitch^2."""
-        return self.n_cells * self.grid[2] ** 2
-
-    def __len__(self) -> int:
-        return len(self.ids)
-
-    def records(self) -> list[dict]:
-        return [dict(frame=self.frame, id=int(i), x_mm=float(x), y_mm=float(y), cells=int(n),
-                     area_mm2=float(a), mean_load=float(m), peak_load=float(p), force_n=float(f))
-                for i, x, y, n, a, m, p, f in zip(self.ids, self.x_mm, self.y_mm, self.n_cells, self.area_mm2,
-                                                  self.mean_load, self.peak_load, self.force_n)]
 
 
 class _Track:
