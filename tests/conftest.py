@@ -1,3 +1,4 @@
+import inspect
 from pathlib import Path
 
 import os
@@ -48,3 +49,20 @@ def tiny(model: str) -> list[str]:
                       "model.candidates.random_forest.estimator.n_estimators=10",
                       "model.candidates.extra_trees.estimator.n_estimators=10"]
     return overrides
+
+
+@pytest.fixture
+def counted_effects():
+    """counted(effects) -> (the same effects, each counting its calls; the counts by name): for
+    the scene contract's test that only listed effects ever run."""
+    def counted(effects):
+        calls = {name: 0 for name in effects}
+
+        def wrap(name, fn):
+            def wrapped(*args, **kwargs):
+                calls[name] += 1
+                return fn(*args, **kwargs)
+            wrapped.__signature__ = inspect.signature(fn)  # scenes read an effect's parameters from it
+            return wrapped
+        return {name: wrap(name, fn) for name, fn in effects.items()}, calls
+    return counted

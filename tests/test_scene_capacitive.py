@@ -2,7 +2,6 @@
 (limit of detection ~0.1 N, ~150 counts at 3 N, nearly linear), the 12 x 21 grid, the effects
 contract, the stream's ground truth, frames files (data/contact_streams.py), bad input and
 hard cases."""
-import inspect
 from pathlib import Path
 
 import numpy as np
@@ -103,17 +102,8 @@ def capacitive6x6_from(cfg):
 
 
 # -- the effects contract -------------------------------------------------------------------
-def test_unlisted_effects_are_never_called(monkeypatch):
-    calls = {name: 0 for name in EFFECTS}
-
-    def spy(name, fn):
-        def wrapped(*args, **kwargs):
-            calls[name] += 1
-            return fn(*args, **kwargs)
-        wrapped.__signature__ = inspect.signature(fn)
-        return wrapped
-
-    spied = {name: spy(name, fn) for name, fn in EFFECTS.items()}
+def test_unlisted_effects_are_never_called(monkeypatch, counted_effects):
+    spied, calls = counted_effects(EFFECTS)
     monkeypatch.setattr(capacitive, "EFFECTS", spied)
     monkeypatch.setattr(capacitive, "MATERIAL_EFFECTS", {n: spied[n] for n in capacitive.MATERIAL_EFFECTS})
     monkeypatch.setattr(capacitive, "READING_EFFECTS", {n: spied[n] for n in capacitive.READING_EFFECTS})

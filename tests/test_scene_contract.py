@@ -20,17 +20,9 @@ def scene(effects, **kwargs):
     return Rubber12Scene(effects=effects, progress=False, **{"n_samples": 60, "grid_nodes": 21, **kwargs})
 
 
-def test_unlisted_effects_are_never_called(monkeypatch):
-    calls = {name: 0 for name in EFFECTS}
-
-    def spy(name, fn):
-        def wrapped(*args, **kwargs):
-            calls[name] += 1
-            return fn(*args, **kwargs)
-        wrapped.__signature__ = __import__("inspect").signature(fn)
-        return wrapped
-
-    monkeypatch.setattr(rubber12, "EFFECTS", {name: spy(name, fn) for name, fn in EFFECTS.items()})
+def test_unlisted_effects_are_never_called(monkeypatch, counted_effects):
+    spied, calls = counted_effects(EFFECTS)
+    monkeypatch.setattr(rubber12, "EFFECTS", spied)
     monkeypatch.setattr(rubber12, "FIELD_EFFECTS", {n: rubber12.EFFECTS[n] for n in rubber12.FIELD_EFFECTS})
     monkeypatch.setattr(rubber12, "READING_EFFECTS", {n: rubber12.EFFECTS[n] for n in rubber12.READING_EFFECTS})
     scene({"contact": {}, "percolation": {}, "adc": {}}).generate()
