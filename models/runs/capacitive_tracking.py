@@ -68,12 +68,13 @@ def load_stream(cfg: DictConfig, recording: dict | None) -> tuple[ContactStream,
     return scene.stream(), scene
 
 
-def fit_force_pipeline(cfg: DictConfig, scene, repetitions: int):
+def fit_force_pipeline(cfg: DictConfig, repetitions: int):
     """The configured model fitted by the regression pipeline on the scene's characterisation
-    presses, each read as the 3 x 3 window around its peak -> (pipeline, summary)."""
-    scene.protocol, scene.characterisation_channels, scene.n_repetitions = "characterisation", "window", int(repetitions)
-    scene.press_offset_mm = scene.pitch_mm / 2   # contacts land anywhere, not only on crossings
-    datamodule = instantiate(cfg.data, source=scene).setup()
+    presses, each read as the 3 x 3 window around its peak, anywhere on its cell (contacts do not
+    land on crossings only) -> (pipeline, summary)."""
+    presses = instantiate(cfg.scene, protocol="characterisation", characterisation_channels="window",
+                          n_repetitions=int(repetitions), press_offset_mm=float(cfg.scene.pitch_mm) / 2)
+    datamodule = instantiate(cfg.data, source=presses).setup()
     result = fit_and_evaluate(cfg, datamodule)
     summary = {"model": result.metrics["model"], "reads": "3x3 window of loads around a contact's peak",
                "presses": int(len(datamodule.y)), "split": datamodule.summary()["split"],
@@ -179,7 +180,7 @@ def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_for
     stream, scene = (None, None) if live else load_stream(cfg, recording)
     force_pipeline, force_info = None, None
     if force_model == "pipeline" and scene is not None:
-        force_pipeline, force_info = fit_force_pipeline(cfg, scene, force_repetitions)
+        force_pipeline, force_info = fit_force_pipeline(cfg, force_repetitions)
     elif force_model not in (None, "none", "pipeline"):
         force_pipeline, force_info = load_force_pipeline(force_model)
     primary = next(iter(trackers))
