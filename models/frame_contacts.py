@@ -5,8 +5,8 @@ import numpy as np
 
 
 class FrameContacts:
-    """One frame's contacts: parallel arrays, one entry per contact; the id image and the areas
-    are computed when asked for (most applications read centroids and ids only). A plain class
+    """One frame's contacts: parallel arrays, one entry per contact; the id image, the areas and
+    the mean loads are computed when asked for (most applications read centroids and ids only). A plain class
     with slots: built once per frame, where a frozen dataclass costs a few microseconds more.
 
     frame: frames updated since fit, from 0; ids: stable contact ids (int64), unique within the
@@ -14,13 +14,23 @@ class FrameContacts:
     corner, column and row direction; n_cells: cells in the contact; mean_load, peak_load: mean
     and largest reading above the rest mean over its cells (RMC); force_n: from the force
     model, NaN without one; cell_contact: per cell (row-major, one padding entry at the end) 0
-    or the contact's index + 1; grid: (rows, cols, pitch_mm)."""
-    __slots__ = ("frame", "ids", "x_mm", "y_mm", "n_cells", "mean_load", "peak_load", "force_n", "cell_contact", "grid")
+    or the contact's index + 1; grid: (rows, cols, pitch_mm); load: per cell, the reading above
+    the rest mean (what mean_load averages over each contact's cells)."""
+    __slots__ = ("frame", "ids", "x_mm", "y_mm", "n_cells", "peak_load", "force_n", "cell_contact", "grid", "load")
 
-    def __init__(self, frame, ids, x_mm, y_mm, n_cells, mean_load, peak_load, force_n, cell_contact, grid):
+    def __init__(self, frame, ids, x_mm, y_mm, n_cells, peak_load, force_n, cell_contact, grid, load):
         self.frame, self.ids, self.x_mm, self.y_mm, self.n_cells = frame, ids, x_mm, y_mm, n_cells
-        self.mean_load, self.peak_load, self.force_n, self.cell_contact, self.grid = \
-            mean_load, peak_load, force_n, cell_contact, grid
+        self.peak_load, self.force_n, self.cell_contact, self.grid, self.load = \
+            peak_load, force_n, cell_contact, grid, load
+
+    @property
+    def mean_load(self) -> np.ndarray:
+        """Mean load over each contact's cells."""
+        n = len(self.ids)
+        if n == 0:
+            return np.zeros(0)
+        total = np.bincount(self.cell_contact[:-1], weights=self.load, minlength=n + 1)[1:]
+        return total / np.maximum(self.n_cells, 1)
 
     @property
     def labels(self) -> np.ndarray:

@@ -15,13 +15,13 @@ def otsu_threshold(values: np.ndarray) -> float:
     such that `values >= t` is the upper class; with a single distinct value everything is."""
     v = np.sort(values)
     n = v.size
-    low, high = v[[0, -1]].tolist()
+    low, high = v[0], v[-1]  # numpy scalars: cheaper than a fancy index and a list
     if low == high:
-        return low
+        return float(low)
     k, k_times_rest = _split_counts(n)
-    below = v[:-1].cumsum()
+    below = np.add.accumulate(v[:-1])  # the ufunc method: no array-method wrapper (~1 us a call here)
     # n^2 sigma_B^2 up to a constant factor: (S(k) - k S(n)/n)^2 / (k (n - k)); in place, fewest calls
-    between = k * ((float(below[-1]) + high) / n)
+    between = k * ((below[-1] + high) / n)
     np.subtract(below, between, out=between)
     between *= between
     between /= k_times_rest
