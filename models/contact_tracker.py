@@ -68,7 +68,7 @@ TRACKINGS = ("global", "paper")
 FORCE_FEATURES = ("peak", "sum", "mean", "window")
 SETTLE_FRAMES, SETTLE_MM = 10, 2.0  # merged members that moved less than this over these frames are one contact
 HISTORY_FRAMES = 10  # centroids kept per track for the velocity a merge remembers (1/6 s at 60 frames/s)
-MAX = np.maximum.reduce
+MAX, MIN = np.maximum.reduce, np.minimum.reduce
 
 
 class _Track:
@@ -268,6 +268,7 @@ class ContactTracker(BaseEstimator):
         self.prev_ids_ = np.zeros(0, dtype=np.int64)
         self.prev_cells_ = np.zeros((0, self.n_cells_), dtype=bool)
         self.near_contact_ = None   # cells next to last frame's contacts (hysteresis), None: none
+        self.last_load_ = None      # the load of the last frame with contacts (ours)
         return self
 
     # ----------------------------------------------------------------------------- per frame
@@ -456,7 +457,8 @@ class ContactTracker(BaseEstimator):
             ids = paper_track_clusters(self.prev_ids_, self.prev_cells_, np.arange(1, n + 1), one_hot)
             self.prev_ids_, self.prev_cells_ = ids, one_hot
         else:
-            ids = self._associate(cells, contact, n_cells, total, x_mm, y_mm, xy_mm, labels)
+            ids = self._associate(cells, contact, n_cells, total, x_mm, y_mm, xy_mm, labels, load)
+            self.last_load_ = load
         if self.hold_sensitivity is not None:
             self.near_contact_ = (labels > 0)[self.neighbourhood_].any(axis=1)
         contacts = FrameContacts(self.frame_index_, ids, x_mm, y_mm, n_cells, peak, self.no_force_[:n], labels,
@@ -504,7 +506,7 @@ class ContactTracker(BaseEstimator):
             if len(kept) != len(self.tracks_):
                 self.tracks_, self.track_cells_ = kept, None
 
-    def _associate(self, cells, contact, det_size, det_load, det_x, det_y, xy_mm, labels) -> np.ndarray:
+    def _associate(self, cells, contact, det_size, det_load, det_x, det_y, xy_mm, labels, load) -> np.ndarray:
         """Ids for this frame's detections (cells and their detection numbers 1..n, labels: the
         detection number of every cell, padded; det_load:
         summed load, what "larger" means when a contact splits)."""
@@ -574,16 +576,22 @@ class ContactTracker(BaseEstimator):
         fresh = [t.missing == 0 for t in tracks]                         # seen last frame
         # merge: a fresh unmatched track that a matched detection has taken in: most of its cells
         # in the region, or some of them with its predicted centroid within a pitch of the
-        # region's (an Otsu core shrinks as two contacts join)
+        # region's (an Otsu core shrinks as two contacts join), or none of them but still
+        # pressed and touching the region (a lighter touch whose peak a firmer neighbour's
+        # spread has absorbed: no dip left between them, so no contact of its own)
         merged = set()
         for t in range(len(tracks)):
             if t in det_of or t in merged or not fresh[t]:
                 continue
             d = int(np.argmax(inter[t]))
-            if d not in track_of or inter[t, d] <= 0:
+            if inter[t, d] <= 0:
+                d = self._absorbing_detection(tracks[t], labels, track_of, load)
+                if d is None:
+                    continue
+            elif d not in track_of:
                 continue
-            near = math.hypot(state[t, 1] - det_x[d], state[t, 2] - det_y[d]) <= self.pitch_mm
-            if inter[t, d] < 0.5 * tracks[t].size and not near:
+            elif inter[t, d] < 0.5 * tracks[t].size and \
+                    math.hypot(state[t, 1] - det_x[d], state[t, 2] - det_y[d]) > self.pitch_mm:
                 continue
             m = track_of[d]
             older, younger = (t, m) if (tracks[t].birth, tracks[t].id) < (tracks[m].birth, tracks[m].id) else (m, t)
@@ -598,16 +606,22 @@ class ContactTracker(BaseEstimator):
             det_of.pop(m, None)
             det_of[older] = d
             track_of[d] = older
-        # split: an unmatched detection lying mostly inside a matched track's last cells is its child
+        # split: an unmatched detection lying mostly inside a matched track's last cells is its
+        # child, or one within the gate of where a contact merged into a matched track would be
+        # now (an absorbed touch reappears beside the region's cells, not inside them)
         matched = np.zeros(len(tracks))
         matched[list(det_of)] = 1.0
+        hosts = [(t, self._member_predictions(tracks[t].memory)) for t in det_of if tracks[t].memory]
         children = {}
         for d in range(n_det):
             if d in track_of:
                 continue
             overlapping = inter[:, d] * matched
             t = int(np.argmax(overlapping))
-            if overlapping[t] >= 0.5 * det_size[d]:
+            if overlapping[t] < 0.5 * det_size[d]:
+                near = [(MIN(np.hypot(*(p - (det_x[d], det_y[d])).T)), h) for h, p in hosts]
+                t = min(near)[1] if near and min(near)[0] <= self.gate_mm_ else None
+            if t is not None:
                 children.setdefault(t, [det_of[t]]).append(d)
         reinstated = []
         for t, kids in children.items():
@@ -725,6 +739,26 @@ class ContactTracker(BaseEstimator):
         own = [s[0] for s in track.memory].index(track.id)
         if total[own] > 0:
             xy_mm[:] = centres[own]
+
+    def _absorbing_detection(self, track, labels, track_of, load):
+        """The matched detection that has absorbed a lost track, or None. Absorbed: the track's
+        last cells still carry their load (at least 60 % of last frame's peak there: a touch that
+        lifts sheds it) and the steepest ascent over this frame's loads above threshold (rows and
+        columns, as the segmentation climbs) from its highest cell ends on that detection's peak:
+        the touch has no peak of its own any more, its load runs up a firmer neighbour's flank."""
+        cells = np.flatnonzero(track.cells)
+        if not len(cells) or self.last_load_ is None or MAX(load[cells]) < 0.6 * MAX(self.last_load_[cells]):
+            return None
+        above = self.above_load_  # this frame's load above threshold, 0 elsewhere and on the padding cell
+        cell = int(cells[np.argmax(above[cells])])
+        for _ in range(self.n_cells_):
+            window = self.window_[cell]
+            up = int(window[np.argmax(above[window])])
+            if above[up] <= above[cell]:
+                break
+            cell = up
+        d = int(labels[cell]) - 1
+        return d if d in track_of else None
 
     def _member_predictions(self, snaps) -> np.ndarray:
         """(members, 2): where each merged contact would be now, carried on from its position
