@@ -55,7 +55,7 @@ class TimeSeriesDataModule:
     def __init__(self, source, label="material", modalities=None, decimate=10, window_length=140,
                  window_step=20, trim_start=3, trim_end=3, min_variance=0.0, variance_channel=0,
                  split="force_level", train_levels=(1, 10, 15, 25), val_levels=(5, 20), val_fraction=0.2,
-                 test_fraction=0.5, force_calibration=None, augment=None, seed=0):
+                 test_fraction=0.5, recorded_test_fraction=0.0, force_calibration=None, augment=None, seed=0):
         self.source = source
         self.label = label
         self.modalities = modalities
@@ -71,6 +71,7 @@ class TimeSeriesDataModule:
         self.val_levels = val_levels
         self.val_fraction = val_fraction
         self.test_fraction = test_fraction
+        self.recorded_test_fraction = recorded_test_fraction
         self.force_calibration = force_calibration
         self.augment = augment
         self.seed = seed
@@ -142,6 +143,24 @@ class TimeSeriesDataModule:
                              f"recording of the {len(rows)} at data.val_levels") from None
         return rows[val], rows[test], []
 
+    def _hold_out_recorded(self, rows, labels):
+        """Recordings at the trained levels -> (train, test): `recorded_test_fraction` of them,
+        stratified by label and level, go to test, so the accuracy at recorded levels is measured
+        on recordings training never saw (the paper's over-fitting observation compares it with
+        the unseen levels'); 0: all train."""
+        fraction = self.recorded_test_fraction
+        if not fraction:
+            return rows, rows[:0]
+        _check_fraction("recorded_test_fraction", fraction)
+        key = np.array([f"{c}|{d}" for c, d in zip(labels[self.label].astype(str).to_numpy()[rows],
+                                                     labels["force_level_n"].to_numpy()[rows])])
+        try:
+            train, test = next(StratifiedShuffleSplit(n_splits=1, test_size=fraction, random_state=self.seed)
+                               .split(np.zeros(len(rows)), key))
+        except ValueError as error:  # a class and level with a single recording
+            raise InputError(f"data.recorded_test_fraction={fraction}: {error}") from None
+        return np.sort(rows[train]), rows[test]
+
     def _split_recordings(self, labels):
         """(train, validation, test) recording indices; every window follows its recording."""
         if self.split in ("force_level", "stratified"):  # predefined: the data say which are test
@@ -159,7 +178,8 @@ class TimeSeriesDataModule:
                                  f"{sorted(set(levels.tolist()))}")
             unseen = np.flatnonzero(np.isin(levels, list(val)))
             val_rec, test_rec, self.test_stratified_by = self._divide_unseen(unseen, labels)
-            return np.flatnonzero(np.isin(levels, list(train))), np.sort(val_rec), np.sort(test_rec)
+            train_rec, recorded_test = self._hold_out_recorded(np.flatnonzero(np.isin(levels, list(train))), labels)
+            return train_rec, np.sort(val_rec), np.sort(np.concatenate([test_rec, recorded_test]))
         if self.split == "stratified":
             _check_fraction("val_fraction", self.val_fraction)
             # Stratified by label, never falling back: a class missing from training is not a split.
