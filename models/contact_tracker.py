@@ -41,9 +41,12 @@ Two trackers:
   gate around the track's predicted centroid (fast moves) or its last one (a light touch whose
   centroid jumps between crossings, where the velocity estimate is noise); merge: the older id survives and the
   younger is remembered inside it, and the region is reported at the older member's cluster of a
-  weighted k-means over the region; split: the larger child keeps the id, unless the region holds
-  remembered contacts, then children and remembered contacts are matched by predicted position; a contact is retired only after `max_missing_frames` frames without a
-  match, so a one-frame dropout does not renumber it.
+  weighted k-means over the region; a lighter touch that loses its own peak to a firmer
+  neighbour's flank while still pressed is merged into that region the same way (absorbed, not
+  retired); split: the larger child keeps the id, unless the region holds remembered contacts,
+  then children (also a detection reappearing within the gate of a remembered contact) and
+  remembered contacts are matched by predicted position; a contact is retired only after
+  `max_missing_frames` frames without a match, so a one-frame dropout does not renumber it.
 
 Speed: a frame with no cell above threshold skips clustering (as the paper). Everything is a
 handful of numpy calls on the few cells above threshold; ids and tracks are the only Python
