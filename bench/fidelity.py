@@ -5,6 +5,7 @@
     .venv/bin/python bench/fidelity.py --scene rubber12 --config rubber12_lab --repeats 50
     .venv/bin/python bench/fidelity.py scene.measurement=opposite     # any Hydra override
     .venv/bin/python bench/fidelity.py --patterns          # which readout reproduces the sensitivity map
+    .venv/bin/python bench/fidelity.py --scene fingertip --repeats 15   # seed 003 + Algorithm 1's diagnostic
 
 The observations are the notes file's (../shared/notes/seed-observations.md); one check per
 observation lives in bench/fidelity_checks.py, which says how each is measured and judged.
@@ -38,9 +39,14 @@ from bench.fidelity_checks import (  # noqa: E402
     mirror_ambiguity_worst_at_edges,
     run_checks,
 )
+from bench.fidelity_fingertip import (  # noqa: E402
+    FingertipProbe,
+    algorithm1_diagnostic,
+    diagnostic_markdown,
+)
 from data.features import FEATURE_GROUPS, compute_features  # noqa: E402
 
-PROBES = {"rubber12": SceneProbe}
+PROBES = {"rubber12": SceneProbe, "fingertip": FingertipProbe}
 
 # rubber12 readout patterns compared by --patterns: named ones and electrode e_i against e_i+k.
 PATTERNS = {"adjacent": "adjacent", "i vs i+3": [[i, (i + 2) % 12 + 1] for i in range(1, 13)],
@@ -132,6 +138,10 @@ def main(argv=None):
     print(f"## {args.scene} (scene={config}; {held} of {measured} measured rows hold; "
           f"{time.perf_counter() - start:.1f} s)\n")
     print(markdown(rows))
+    if args.scene == "fingertip":
+        probe = PROBES[args.scene](scene_params(config, args.overrides), repeats=args.repeats)
+        print("\n### Algorithm 1's cubic at the unseen levels (materials10)\n")
+        print(diagnostic_markdown(algorithm1_diagnostic(probe)))
 
 
 if __name__ == "__main__":

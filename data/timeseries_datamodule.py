@@ -22,6 +22,8 @@ and set to the seed paper's values by the fingertip's (configs/data/fingertip.ya
 - channels are standardised with statistics of the real training windows (validation and test
   with the same ones).
 """
+import logging
+
 import numpy as np
 from sklearn.model_selection import ShuffleSplit, StratifiedShuffleSplit
 
@@ -31,6 +33,8 @@ from data.recordings import RecordingSet
 from data.splits import SPLIT_NOTES, predefined_split
 from data.virtual_force_levels import virtual_force_levels
 from data.windows import cut_windows, decimate
+
+log = logging.getLogger(__name__)
 
 
 SPLITS = ("force_level", "stratified", "predefined")
@@ -149,6 +153,7 @@ class TimeSeriesDataModule:
         on recordings training never saw (the paper's over-fitting observation compares it with
         the unseen levels'); 0: all train."""
         fraction = self.recorded_test_fraction
+        self.recorded_test = None
         if not fraction:
             return rows, rows[:0]
         _check_fraction("recorded_test_fraction", fraction)
@@ -157,8 +162,11 @@ class TimeSeriesDataModule:
         try:
             train, test = next(StratifiedShuffleSplit(n_splits=1, test_size=fraction, random_state=self.seed)
                                .split(np.zeros(len(rows)), key))
-        except ValueError as error:  # a class and level with a single recording
-            raise InputError(f"data.recorded_test_fraction={fraction}: {error}") from None
+        except ValueError:  # too few recordings per class and level (a tiny run): hold none out, say so
+            self.recorded_test = "none: too few recordings per class and level for the requested share"
+            log.warning("data.recorded_test_fraction=%s: %s", fraction, self.recorded_test)
+            return rows, rows[:0]
+        self.recorded_test = f"{len(test)} recordings at the trained levels, stratified by label and level"
         return np.sort(rows[train]), rows[test]
 
     def _split_recordings(self, labels):
@@ -287,6 +295,7 @@ class TimeSeriesDataModule:
                 "n_val_recordings": int(len(self.val_recordings)), "n_test_recordings": int(len(self.test_recordings)),
                 "test_fraction": None if self.split == "predefined" else self.test_fraction,
                 "test_stratified_by": self.test_stratified_by,
+                "recorded_level_test": getattr(self, "recorded_test", None),
                 "window": [int(self.X_train.shape[1]), int(self.X_train.shape[2])],
                 "sample_rate_hz": self.sample_rate_hz, "recording_rate_hz": self.recording_rate_hz,
                 "decimate": int(self.decimate), "trim": [int(self.trim_start), int(self.trim_end)],

@@ -39,3 +39,13 @@ def test_bad_fractions_are_one_line_errors(fraction):
 def test_same_seed_same_held_out_recordings():
     assert np.array_equal(datamodule(recorded_test_fraction=0.4).test_recordings,
                           datamodule(recorded_test_fraction=0.4).test_recordings)
+
+
+def test_too_few_recordings_per_class_and_level_hold_none_out_and_say_so():
+    scene = FingertipScene(boards=["glass/flat", "acrylic/flat"], passes_per_level=2, effects={})
+    dm = TimeSeriesDataModule(scene, label="board", recorded_test_fraction=0.2).setup()
+    levels = dm.recordings.labels["force_level_n"].to_numpy()
+    assert set(levels[dm.test_recordings]) == {5, 20}
+    assert dm.summary()["recorded_level_test"].startswith("none")
+    held = datamodule(recorded_test_fraction=0.4).summary()["recorded_level_test"]
+    assert held.startswith("16 recordings")

@@ -27,7 +27,8 @@ FINGERTIP = {"decimate": 10, "window_length": 140, "window_step": 20, "trim_star
              "split": "force_level", "train_levels": [1, 10, 15, 25], "val_levels": [5, 20], "test_fraction": 0.5,
              "val_fraction": 0.2, "min_variance": 0.0, "variance_channel": 0,
              "modalities": {"triboelectric": ["triboelectric_na"], "piezoresistive": ["piezoresistive_n"]},
-             "force_calibration": {"channel": "piezoresistive_v", "supply_v": 3.3, "divider_resistor_ohm": 1.0e4,
+             "force_calibration": {"channel": "piezoresistive_v", "supply_v": 3.3, "reference_v": 0.25,
+                                   "feedback_resistor_ohm": 1.8e4, "series_resistor_ohm": 1.0e3,
                                    "fsr_resistance_1n_ohm": 1.0e4, "fsr_exponent": 0.9, "fsr_saturation_n": 22.0}}
 
 

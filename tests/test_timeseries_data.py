@@ -35,7 +35,8 @@ def small_scene(**kwargs):
                              "effects": {}, **kwargs})
 
 
-CALIBRATION = {"channel": "piezoresistive_v", "supply_v": 3.3, "divider_resistor_ohm": 1.0e4,
+CALIBRATION = {"channel": "piezoresistive_v", "supply_v": 3.3, "reference_v": 0.25, "feedback_resistor_ohm": 1.8e4,
+               "series_resistor_ohm": 1.0e3,
                "fsr_resistance_1n_ohm": 1.0e4, "fsr_exponent": 0.9, "fsr_saturation_n": 22.0}
 
 

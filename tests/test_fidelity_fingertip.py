@@ -1,0 +1,56 @@
+"""The fingertip fidelity rows that hold (bench/fidelity_fingertip.py, docs/fidelity.md) keep
+holding, with margin, on fewer passes than the table; and Algorithm 1's diagnostic is measured."""
+import numpy as np
+import pytest
+
+from bench import fidelity
+from bench import fidelity_fingertip as rows
+from bench.fidelity_checks import CHECKS
+
+
+@pytest.fixture(scope="module")
+def probe():
+    return rows.FingertipProbe(fidelity.scene_params("fingertip"), repeats=6)
+
+
+def test_every_observation_of_seed_003_has_a_row():
+    assert [fn.observation[1] for fn in CHECKS["fingertip"]] == ["1", "2", "3", "4", "5", "6"]
+
+
+def test_boards_are_the_papers(probe):
+    measured = rows.boards_match_the_paper(probe)
+    assert measured.holds and all(measured.numbers["same"].values())
+
+
+def test_triboelectric_separates_materials_at_one_level_not_across_levels(probe):
+    numbers = rows.triboelectric_separates_at_one_level(probe).numbers
+    assert numbers["one_level"] > 0.5                       # table: 79 %, tolerance 2 x chance = 20 %
+    assert numbers["one_level"] > 2.0 * numbers["pooled"]   # table: 79 % vs 26 %, tolerance 1.3 x
+
+
+def test_force_and_texture_show_in_both_channels(probe):
+    numbers = rows.force_and_texture_in_both_channels(probe).numbers
+    assert numbers["force_error"] < 0.02                    # table: 0.5 %, tolerance 5 %
+    assert min(numbers["hits"].values()) >= 11              # table: 12 of 12, tolerance 10
+
+
+def test_training_rows_say_where_they_are_measured(probe):
+    for fn in CHECKS["fingertip"][3:]:
+        measured = fn(probe)
+        assert measured.holds is None and "training runs" in measured.value
+
+
+def test_algorithm1_diagnostic_covers_every_class_and_unseen_level(probe):
+    diagnostic = rows.algorithm1_diagnostic(probe)
+    assert len(diagnostic["error"]) == 10
+    for errors in diagnostic["error"].values():
+        assert set(errors) == {5.0, 20.0} and all(np.isfinite(list(errors.values())))
+    assert set(diagnostic["pass_cv"]) == {1.0, 5.0, 10.0, 15.0, 20.0, 25.0}
+    text = rows.diagnostic_markdown(diagnostic)
+    assert text.count("\n") == 2 + 10 + 1 + 2 + 6 - 1      # two tables, a blank line between
+
+
+def test_fidelity_script_prints_the_fingertip_table(capsys):
+    fidelity.main(["--scene", "fingertip", "--repeats", "2"])
+    out = capsys.readouterr().out
+    assert "3 of 3 measured rows hold" in out and "Algorithm 1's cubic" in out
