@@ -23,15 +23,12 @@ from models.kfold_blend import KFoldBlend  # noqa: E402
 from models.report.metrics import regression_metrics  # noqa: E402
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seeds", type=int, default=5)
-    parser.add_argument("--folds", type=int, default=5)
-    parser.add_argument("overrides", nargs="*")
-    args = parser.parse_args(argv)
+def measure(seeds: int = 5, folds: int = 5, overrides=()) -> dict:
+    """Fit the net single and K-fold blended per seed; per target: test R² of each (one per seed),
+    the prediction variance across seeds of each, and the variance reduction 1 - blend / single."""
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
         cfg = compose("config", overrides=["model=resmlp", "trainer.progress=false", "scene.progress=false",
-                                            *args.overrides])
+                                            *overrides])
     datamodule = instantiate(cfg.data).setup()
     (X, y), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     targets = datamodule.target_names
@@ -39,9 +36,9 @@ def main(argv=None):
     predictions = {"single": [], "blend": []}
     r2 = {"single": [], "blend": []}
     seconds = {"single": 0.0, "blend": 0.0}
-    for seed in range(args.seeds):
+    for seed in range(seeds):
         net = instantiate(cfg.model, seed=seed)
-        for kind, model in (("single", net), ("blend", KFoldBlend(net, n_folds=args.folds, seed=seed, progress=False))):
+        for kind, model in (("single", net), ("blend", KFoldBlend(net, n_folds=folds, seed=seed, progress=False))):
             start = time.perf_counter()
             # the single net early-stops on the validation split; each fold net carves its own
             # early-stopping rows from its K - 1 folds (grouped like the split)
@@ -52,15 +49,29 @@ def main(argv=None):
             r2[kind].append([regression_metrics(y_test, predicted, targets)[t]["r2"] for t in targets])
         print(f"seed {seed} done", file=sys.stderr)
     spread = {k: np.stack(v).var(axis=0, ddof=1).mean(axis=0) for k, v in predictions.items()}
-    print(f"\n{args.seeds} seeds, K = {args.folds}, {len(X)} training rows, {len(X_test)} test rows\n")
+    return {"targets": targets, "n_train": len(X), "n_test": len(X_test),
+            "r2": {k: np.asarray(v) for k, v in r2.items()}, "variance": spread,
+            "reduction": 1.0 - spread["blend"] / spread["single"],
+            "seconds_per_seed": {k: v / seeds for k, v in seconds.items()}}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--folds", type=int, default=5)
+    parser.add_argument("overrides", nargs="*")
+    args = parser.parse_args(argv)
+    result = measure(args.seeds, args.folds, args.overrides)
+    r2, spread = result["r2"], result["variance"]
+    print(f"\n{args.seeds} seeds, K = {args.folds}, {result['n_train']} training rows, {result['n_test']} test rows\n")
     print("| target | test R² single (mean ± sd) | test R² K-fold blend | prediction variance across seeds, single | blend | variance reduction |")
     print("|---|---|---|---|---|---|")
-    for k, t in enumerate(targets):
-        single, blend = np.asarray(r2["single"])[:, k], np.asarray(r2["blend"])[:, k]
+    for k, t in enumerate(result["targets"]):
+        single, blend = r2["single"][:, k], r2["blend"][:, k]
         print(f"| {t} | {single.mean():.4f} ± {single.std(ddof=1):.4f} | {blend.mean():.4f} ± {blend.std(ddof=1):.4f} "
-              f"| {spread['single'][k]:.4g} | {spread['blend'][k]:.4g} | {100 * (1 - spread['blend'][k] / spread['single'][k]):.1f} % |")
-    print(f"\nfit time: single {seconds['single'] / args.seeds:.1f} s, blend {seconds['blend'] / args.seeds:.1f} s per seed")
-
+              f"| {spread['single'][k]:.4g} | {spread['blend'][k]:.4g} | {100 * result['reduction'][k]:.1f} % |")
+    seconds = result["seconds_per_seed"]
+    print(f"\nfit time: single {seconds['single']:.1f} s, blend {seconds['blend']:.1f} s per seed")
 
 if __name__ == "__main__":
     main()
