@@ -614,7 +614,7 @@ class ContactTracker(BaseEstimator):
         # now (an absorbed touch reappears beside the region's cells, not inside them)
         matched = np.zeros(len(tracks))
         matched[list(det_of)] = 1.0
-        hosts = [(t, self._member_predictions(tracks[t].memory)) for t in det_of if tracks[t].memory]
+        hosts = None  # (track, its remembered members' predicted positions), built when first needed
         children = {}
         for d in range(n_det):
             if d in track_of:
@@ -622,6 +622,8 @@ class ContactTracker(BaseEstimator):
             overlapping = inter[:, d] * matched
             t = int(np.argmax(overlapping))
             if overlapping[t] < 0.5 * det_size[d]:
+                if hosts is None:
+                    hosts = [(h, self._member_predictions(tracks[h].memory)) for h in det_of if tracks[h].memory]
                 near = [(MIN(np.hypot(*(p - (det_x[d], det_y[d])).T)), h) for h, p in hosts]
                 t = min(near)[1] if near and min(near)[0] <= self.gate_mm_ else None
             if t is not None:

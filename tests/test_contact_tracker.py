@@ -252,7 +252,7 @@ def test_tracking_metrics_count_detections_and_switches():
 CONFIGS = [{}, PAPER, {"hold_sensitivity": 3.0, "connectivity": 4}, {"follow_drift": True}]
 
 
-def check(results, rows, cols):
+def assert_contacts_valid(results, rows, cols):
     for result in results:
         assert len(set(result.ids.tolist())) == len(result.ids)
         assert set(np.unique(result.labels[result.labels > 0]).tolist()) == set(result.ids.tolist())
@@ -280,7 +280,7 @@ def test_constant_and_saturated_frames(grid, config, level, rest_noise, seed):
     hot[rng.integers(rows), rng.integers(cols)] = 65535.0
     live = [np.full((rows, cols), level), np.full((rows, cols), 65535.0), hot, hot, np.full((rows, cols), level),
             np.clip(np.full((rows, cols), level) + 50.0, 0, 65535), np.full((rows, cols), 0.0)]
-    check(run(ContactTracker(rows=rows, cols=cols, pitch_mm=PITCH, **config), rest, live), rows, cols)
+    assert_contacts_valid(run(ContactTracker(rows=rows, cols=cols, pitch_mm=PITCH, **config), rest, live), rows, cols)
 
 
 @settings(max_examples=40)
@@ -293,7 +293,7 @@ def test_random_streams_keep_ids_unique(grid, config, seed, n_frames):
     live = 1000.0 + rng.normal(0.0, 1.0, (n_frames, rows, cols))
     live += rng.choice([0.0, 40.0, 400.0], size=(n_frames, rows, cols), p=[0.6, 0.3, 0.1])
     live[rng.random(n_frames) < 0.2] += 500.0                          # every cell above threshold
-    check(run(ContactTracker(rows=rows, cols=cols, pitch_mm=PITCH, **config), rest, live), rows, cols)
+    assert_contacts_valid(run(ContactTracker(rows=rows, cols=cols, pitch_mm=PITCH, **config), rest, live), rows, cols)
 
 
 # ------------------------------------------------------------------------------ bad input
