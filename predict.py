@@ -6,8 +6,10 @@ Regression models read one row per press with the model's channel columns and wr
 targets (units in the column names) and, when the model has them, 95 % interval bounds.
 Classification models read one recording (rows = time steps, channel columns) and write one
 row per consecutive window with the class probabilities. CSV or Parquet in and out.
-Bad input is one line on stderr, exit code 2, and no output file.
+Bad input (a file, a value that is not finite in the model's dtype, an output that is the input
+or cannot be written, a malformed model) is one line on stderr, exit code 2, and no output file.
 """
+import os
 import sys
 from pathlib import Path
 
@@ -40,20 +42,56 @@ def thread_count(text: str) -> int | None:
     return int(text)
 
 
+def check_output(output: Path, args: dict) -> None:
+    """Before any work: the output is a file predict.py may create or replace, and neither the
+    input nor the model (compared as resolved paths, so symlinks and relative paths count)."""
+    for key in ("input", "model"):
+        if same_file(Path(args[key]), output):
+            raise InputError(f"output={output} is the {key} file {args[key]}; predict.py never overwrites its "
+                             f"{key}, name another output")
+    if output.is_dir():
+        raise InputError(f"output={output} is a folder; name a file in it, e.g. {output / 'pred.csv'}")
+    if output.exists() and not output.is_file():
+        raise InputError(f"output={output} exists and is not a regular file")
+    folder = output.parent
+    while not folder.exists():  # atomic_write creates the missing folders under the nearest existing one
+        folder = folder.parent
+    if not folder.is_dir():
+        raise InputError(f"output={output}: {folder} is a file, not a folder")
+    if not os.access(folder, os.W_OK | os.X_OK):
+        raise InputError(f"output={output}: folder {folder} is not writable")
+
+
+def same_file(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve() or (a.exists() and b.exists() and os.path.samefile(a, b))
+    except (OSError, RuntimeError) as error:  # a symlink loop, a path too long
+        raise InputError(f"cannot resolve {a} or {b} ({error})".splitlines()[0]) from None
+
+
+def write(result, output: Path) -> None:
+    parquet = output.suffix.lower() in (".parquet", ".pq")
+    try:
+        atomic_write(output, lambda tmp: result.to_parquet(tmp, index=False) if parquet
+                     else result.to_csv(tmp, index=False))
+    except OSError as error:  # e.g. a read-only file system, a full disk, permissions root ignores
+        where = f" {error.filename}" if error.filename else ""
+        raise InputError(f"output={output}: cannot write{where} ({error.strerror or type(error).__name__})") from None
+
+
 def main(argv=None) -> int:
     try:
         args = parse(sys.argv[1:] if argv is None else argv)
-        predictor = OnnxPredictor(args["model"], threads=thread_count(args["threads"]) if "threads" in args else None)
+        threads = thread_count(args["threads"]) if "threads" in args else None
+        output = Path(args["output"])
+        check_output(output, args)
+        predictor = OnnxPredictor(args["model"], threads=threads)
         frame = read_table_file(args["input"])
         if predictor.kind == "regression":
             result = predictor.predict_table(frame, args["input"])
         else:
             result = predictor.predict_recording(frame, args["input"])
-        output = Path(args["output"])
-        if output.suffix.lower() in (".parquet", ".pq"):
-            atomic_write(output, lambda tmp: result.to_parquet(tmp, index=False))
-        else:
-            atomic_write(output, lambda tmp: result.to_csv(tmp, index=False))
+        write(result, output)
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2

@@ -1,0 +1,275 @@
+"""predict.py on bad input: every case is one line on stderr naming the culprit, exit code 2 and
+no output file; nothing it writes holds a non-finite number. Models are the hand-built ones of
+tests/tiny_onnx.py (same names, dtypes and metadata keys as an export)."""
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import predict
+from data.errors import InputError
+from export.onnx_predictor import OnnxPredictor
+from tiny_onnx import (CHANNELS, CLASSES, WINDOW_STEPS, classification_metadata, classification_model,
+                       regression_metadata, regression_model, save)
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run_main(capsys, *args) -> tuple[int, str, str]:
+    code = predict.main([str(a) for a in args])
+    captured = capsys.readouterr()
+    return code, captured.out, captured.err
+
+
+def assert_one_line_error(code, err, *fragments):
+    assert code == 2, err
+    assert err.startswith("error: ") and err.count("\n") == 1 and "Traceback" not in err, err
+    for fragment in fragments:
+        assert fragment in err, (fragment, err)
+
+
+@pytest.fixture
+def models(tmp_path):
+    return {"regression": save(regression_model(), tmp_path / "reg.onnx"),
+            "classification": save(classification_model(), tmp_path / "cls.onnx")}
+
+
+def recording(steps=2 * WINDOW_STEPS, **cells) -> pd.DataFrame:
+    """A recording of `steps` rows; cells={(row, column): value} overrides single values."""
+    frame = pd.DataFrame(np.linspace(0.0, 1.0, steps * len(CHANNELS)).reshape(steps, len(CHANNELS)), columns=CHANNELS)
+    for (row, column), value in cells.get("cells", {}).items():
+        frame.loc[row, column] = value
+    return frame
+
+
+# -- values that are not finite in the model's dtype --------------------------------------
+# A table's values are checked where the table is read (data/table_files.py: finite in float32,
+# the dtype the models compute in) and again by the predictor against the graph's own input dtype;
+# either names the file, the column, the line and the value.
+@pytest.mark.parametrize("value", [1e308, -1e308, 3.5e38])
+def test_a_value_beyond_float32_is_refused_naming_column_and_line(models, tmp_path, capsys, value):
+    recording(cells={(5, "b_ohm"): value}).to_csv(tmp_path / "pass.csv", index=False)
+    out = tmp_path / "classes.csv"
+    code, _, err = run_main(capsys, f"model={models['classification']}", f"input={tmp_path / 'pass.csv'}",
+                            f"output={out}")
+    assert_one_line_error(code, err, "pass.csv: ", "'b_ohm'", "line 7", f"{value:g}", "float32")
+    assert not out.exists()
+
+
+def test_a_value_beyond_float32_in_parquet_names_the_row(models, tmp_path, capsys):
+    recording(cells={(2, "a_ohm"): 1e308}).to_parquet(tmp_path / "pass.parquet", index=False)
+    code, _, err = run_main(capsys, f"model={models['classification']}", f"input={tmp_path / 'pass.parquet'}",
+                            f"output={tmp_path / 'c.csv'}")
+    assert_one_line_error(code, err, "pass.parquet: ", "'a_ohm'", "row 3", "1e+308", "float32")
+
+
+def test_arrays_are_checked_in_the_graphs_input_dtype(models):
+    """The array API (what bench/ and latency measurements call) casts to the graph's input dtype
+    and refuses what is not finite there, naming the index and the channel."""
+    classifier = OnnxPredictor(models["classification"])
+    windows = np.ones((2, len(CHANNELS), WINDOW_STEPS))
+    windows[1, 0, 3] = -1e308
+    with pytest.raises(InputError, match=r"^windows\[1, 0, 3\] \(channel 'a_ohm'\) has -1e\+308, beyond the "
+                                         r"model's float32 range \(±3.403e\+38\)$"):
+        classifier.predict_windows(windows)
+    windows[1, 0, 3] = np.nan
+    with pytest.raises(InputError, match=r"^windows\[1, 0, 3\] \(channel 'a_ohm'\) has nan \(not finite\)$"):
+        classifier.predict_windows(windows)
+    with pytest.raises(InputError, match="input values must be real numbers, got dtype complex128"):
+        classifier.predict_windows(windows.astype(complex))
+    # the regression graph takes float64: 1e308 is a valid input there, and its float32 part makes
+    # the output inf, which is refused too
+    regressor = OnnxPredictor(models["regression"])
+    assert regressor.input_dtype == np.float64
+    with pytest.raises(InputError, match=r"^readings row 1: the model's output 'prediction' is not finite"):
+        regressor.predict_array(np.array([[1.0, 2.0], [1e308, 1.0]]))
+    np.testing.assert_allclose(regressor.predict_array(np.array([[1.0, 2.0]]))["prediction"], [[3.0]])
+
+
+def test_an_infinite_output_is_refused_not_written(models, tmp_path, capsys):
+    """Two readings within float32 whose sum in the graph's float32 part is not: the prediction is
+    inf, and is refused rather than written."""
+    pd.DataFrame({"a_ohm": [1.0, 3e38, 2.0], "b_ohm": [1.0, 3e38, 1.0]}).to_csv(tmp_path / "rig.csv", index=False)
+    out = tmp_path / "pred.csv"
+    code, _, err = run_main(capsys, f"model={models['regression']}", f"input={tmp_path / 'rig.csv'}", f"output={out}")
+    assert_one_line_error(code, err, "rig.csv: line 3: the model's output 'prediction' is not finite")
+    assert not out.exists()
+
+
+def test_finite_input_whose_probabilities_overflow_is_refused(models, tmp_path, capsys):
+    """Every value fits float32, but the graph's sum over the window overflows: NaN
+    probabilities are never written."""
+    big = recording(steps=2 * WINDOW_STEPS)
+    big.iloc[WINDOW_STEPS:] = 3e38  # the second window
+    big.to_csv(tmp_path / "pass.csv", index=False)
+    out = tmp_path / "classes.csv"
+    code, _, err = run_main(capsys, f"model={models['classification']}", f"input={tmp_path / 'pass.csv'}",
+                            f"output={out}")
+    assert_one_line_error(code, err, f"pass.csv: the window starting at line {WINDOW_STEPS + 2}: the model's output "
+                                     "'probabilities' is not finite")
+    assert not out.exists()
+
+
+def test_ordinary_input_is_predicted_and_written_finite(models, tmp_path, capsys):
+    """The same models and files without the bad value: the predictions are written, all finite."""
+    recording().to_csv(tmp_path / "pass.csv", index=False)
+    code, out, err = run_main(capsys, f"model={models['classification']}", f"input={tmp_path / 'pass.csv'}",
+                              f"output={tmp_path / 'classes.csv'}")
+    assert code == 0 and "wrote 2 rows" in out, err
+    classes = pd.read_csv(tmp_path / "classes.csv")
+    assert list(classes.columns) == ["start_row", "predicted"] + [f"p_{c}" for c in CLASSES]
+    probabilities = classes[[f"p_{c}" for c in CLASSES]].to_numpy()
+    assert np.isfinite(probabilities).all() and np.allclose(probabilities.sum(axis=1), 1.0, atol=1e-6)
+    pd.DataFrame({"a_ohm": [1.0, 2.5], "b_ohm": [2.0, 1.5]}).to_parquet(tmp_path / "rig.parquet")
+    code, _, err = run_main(capsys, f"model={models['regression']}", f"input={tmp_path / 'rig.parquet'}",
+                            f"output={tmp_path / 'pred.parquet'}")
+    assert code == 0, err
+    np.testing.assert_allclose(pd.read_parquet(tmp_path / "pred.parquet")["x_mm"], [3.0, 4.0])
+
+
+# -- the output is the input, or cannot be written ----------------------------------------
+@pytest.fixture
+def sample(models, tmp_path):
+    """A recording file and a function giving the arguments that would predict it into `output`."""
+    recording().to_csv(tmp_path / "pass.csv", index=False)
+    return lambda output: [f"model={models['classification']}", f"input={tmp_path / 'pass.csv'}", f"output={output}"]
+
+
+def test_output_equal_to_input_is_refused_and_the_input_kept(sample, tmp_path, capsys, monkeypatch):
+    before = (tmp_path / "pass.csv").read_bytes()
+    (tmp_path / "sub").mkdir()
+    (tmp_path / "link.csv").symlink_to(tmp_path / "pass.csv")
+    os.link(tmp_path / "pass.csv", tmp_path / "hard.csv")
+    monkeypatch.chdir(tmp_path / "sub")
+    for output in (tmp_path / "pass.csv", "../pass.csv", "./../sub/../pass.csv", tmp_path / "link.csv",
+                   tmp_path / "hard.csv"):
+        code, _, err = run_main(capsys, *sample(output))
+        assert_one_line_error(code, err, f"output={Path(output)} is the input file", "never overwrites its input")
+    assert (tmp_path / "pass.csv").read_bytes() == before
+
+
+def test_output_equal_to_the_model_is_refused(sample, models, capsys):
+    before = models["classification"].read_bytes()
+    code, _, err = run_main(capsys, *sample(models["classification"]))
+    assert_one_line_error(code, err, "is the model file")
+    assert models["classification"].read_bytes() == before
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and /sys are Linux's")
+@pytest.mark.parametrize("output, fragments", [
+    ("{tmp}/pass.csv/pred.csv", ["pass.csv is a file, not a folder"]),  # parent is a file
+    ("/proc/touchstone/pred.csv", ["cannot write /proc/touchstone"]),  # a parent nobody can create
+    ("/sys/touchstone_pred.csv", ["/sys"]),  # a folder nobody may create files in, root included
+    ("{tmp}", ["is a folder; name a file in it"]),
+    ("{tmp}/", ["is a folder; name a file in it"]),
+    ("", ["is a folder; name a file in it"]),
+    ("{tmp}/pipe", ["exists and is not a regular file"]),  # a FIFO here: a device like /dev/null would be
+])                                                        # replaced for everyone by a regression run as root
+def test_unwritable_output_is_one_line(sample, tmp_path, capsys, output, fragments):
+    os.mkfifo(tmp_path / "pipe")
+    output = output.format(tmp=tmp_path)
+    code, _, err = run_main(capsys, *sample(output))
+    assert_one_line_error(code, err, f"output={Path(output)}", *fragments)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cls.onnx", "pass.csv", "pipe", "reg.onnx"]
+    assert not (tmp_path / "pipe").is_file()
+
+
+def test_missing_output_folders_are_created(sample, tmp_path, capsys):
+    code, _, err = run_main(capsys, *sample(tmp_path / "new" / "deeper" / "classes.csv"))
+    assert code == 0, err
+    assert len(pd.read_csv(tmp_path / "new" / "deeper" / "classes.csv")) == 2
+
+
+# -- malformed model files and metadata ---------------------------------------------------
+def without(metadata, key):
+    return {k: v for k, v in metadata.items() if k != key}
+
+
+def replaced(metadata, key, value):
+    return {**metadata, key: value}
+
+
+REG, CLS = regression_metadata(), classification_metadata()
+METADATA_CASES = [
+    ("regression", {}, "not a Touchstone model (no metadata key 'kind')"),
+    ("regression", without(REG, "kind"), "no metadata key 'kind'"),
+    ("regression", replaced(REG, "kind", "clustering"), "metadata 'kind' must be one of regression, classification"),
+    ("regression", without(REG, "channels"), "metadata key 'channels' is missing"),
+    ("regression", without(REG, "targets"), "metadata key 'targets' is missing"),
+    ("regression", without(REG, "outputs"), "metadata key 'outputs' is missing"),
+    ("classification", without(CLS, "classes"), "metadata key 'classes' is missing"),
+    ("classification", without(CLS, "window_steps"), "metadata key 'window_steps' is missing"),
+    ("regression", replaced(REG, "channels", '["a_ohm", "b_ohm"'), "metadata 'channels' is not valid JSON"),
+    ("regression", replaced(REG, "targets", "x_mm"), "metadata 'targets' is not valid JSON"),
+    ("regression", replaced(REG, "channels", '"a_ohm"'), "metadata 'channels' must be a non-empty JSON list of names"),
+    ("regression", replaced(REG, "channels", "[1, 2]"), "metadata 'channels' must be a non-empty JSON list of names"),
+    ("regression", replaced(REG, "targets", "[]"), "metadata 'targets' must be a non-empty JSON list of names"),
+    ("regression", replaced(REG, "targets", "null"), "metadata 'targets' must be a non-empty JSON list of names"),
+    ("regression", replaced(REG, "outputs", '{"prediction": 1}'), "metadata 'outputs' must be a non-empty JSON list"),
+    ("regression", replaced(REG, "channels", '["a_ohm", "a_ohm"]'), "metadata 'channels' lists 'a_ohm' more than once"),
+    ("classification", replaced(CLS, "window_steps", "abc"), "metadata 'window_steps' must be a positive whole number"),
+    ("classification", replaced(CLS, "window_steps", "0"), "metadata 'window_steps' must be a positive whole number"),
+    ("classification", replaced(CLS, "window_steps", "-4"), "metadata 'window_steps' must be a positive whole number"),
+    ("classification", replaced(CLS, "window_steps", "4.0"), "metadata 'window_steps' must be a positive whole number"),
+    ("classification", replaced(CLS, "window_steps", "8"), "but metadata 'channels' and window_steps say (batch, 2, 8)"),
+    ("regression", replaced(REG, "channels", json.dumps(CHANNELS + ["c_ohm"])), "metadata 'channels' say (batch, 3)"),
+    ("regression", replaced(REG, "targets", '["x_mm", "y_mm"]'), "metadata 'targets' names 2"),
+    ("classification", replaced(CLS, "classes", '["soft"]'), "metadata 'classes' names 1"),
+    ("regression", replaced(REG, "outputs", '["probabilities"]'), "metadata 'outputs' says ['probabilities']"),
+    ("regression", replaced(REG, "kind", "classification"), "metadata key 'classes' is missing"),
+    ("classification", replaced(CLS, "kind", "regression"), "metadata key 'targets' is missing"),
+    ("classification", {**REG, "kind": "classification", "classes": json.dumps(CLASSES), "window_steps": "4"},
+     "the graph takes ['window'], expected one input 'channels'"),
+]
+
+
+@pytest.mark.parametrize("kind, metadata, fragment", METADATA_CASES)
+def test_malformed_metadata_is_one_line_naming_file_and_key(tmp_path, capsys, kind, metadata, fragment):
+    build = regression_model if kind == "regression" else classification_model
+    if "expected one input 'channels'" in fragment:  # a classification graph labelled regression
+        metadata = replaced(metadata, "kind", "regression")
+    model = save(build(metadata), tmp_path / "model.onnx")
+    recording().to_csv(tmp_path / "in.csv", index=False)
+    out = tmp_path / "out.csv"
+    code, _, err = run_main(capsys, f"model={model}", f"input={tmp_path / 'in.csv'}", f"output={out}")
+    assert_one_line_error(code, err, f"{model}: ", fragment)
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("content, fragment", [
+    (b"", "model file is empty"),
+    (b"a_ohm,b_ohm\n1,2\n", "not a loadable ONNX model"),
+    (b"\x00\xff" * 50, "not a loadable ONNX model"),
+    ("truncated", "not a loadable ONNX model"),
+    ("folder", "no such model file"),
+    ("missing", "no such model file"),
+])
+def test_a_file_that_is_not_a_model_is_one_line(tmp_path, capsys, content, fragment):
+    model = tmp_path / "model.onnx"
+    if content == "truncated":
+        whole = regression_model().SerializeToString()
+        model.write_bytes(whole[:len(whole) // 2])
+    elif content == "folder":
+        model.mkdir()
+    elif content != "missing":
+        model.write_bytes(content)
+    recording().to_csv(tmp_path / "in.csv", index=False)
+    code, _, err = run_main(capsys, f"model={model}", f"input={tmp_path / 'in.csv'}", f"output={tmp_path / 'o.csv'}")
+    assert_one_line_error(code, err, f"{model}: {fragment}")
+
+
+# -- the command itself --------------------------------------------------------------------
+def test_the_command_prints_one_line_and_exits_2(models, tmp_path):
+    """As a user runs it: no RuntimeWarning from the float32 cast, one line, exit 2, no file."""
+    recording(cells={(1, "a_ohm"): 1e308}).to_csv(tmp_path / "pass.csv", index=False)
+    result = subprocess.run([sys.executable, str(ROOT / "predict.py"), f"model={models['classification']}",
+                             "input=pass.csv", "output=classes.csv"], capture_output=True, text=True, cwd=tmp_path)
+    assert result.returncode == 2
+    assert result.stderr.startswith("error: pass.csv: ") and result.stderr.count("\n") == 1, result.stderr
+    assert all(fragment in result.stderr for fragment in ("'a_ohm'", "line 3", "1e+308", "float32")), result.stderr
+    assert not (tmp_path / "classes.csv").exists()

@@ -1,0 +1,73 @@
+"""Tiny hand-built ONNX models with Touchstone's metadata, for predict.py's tests: built in
+milliseconds without training, with the same input and output names, dtypes and metadata keys
+that export/pipelines.py writes, and any piece of them can be made wrong on purpose.
+
+- regression: `channels` [batch, 2] float64 -> cast to float32 -> sum per row -> `prediction`
+  [batch, 1] float32, so a float64 reading beyond float32's range makes the output inf (as the
+  exported graphs' float32 parts would);
+- classification: `window` [batch, 2, 4] float32 -> sum over the window -> softmax ->
+  `probabilities` [batch, 2], so values whose sum overflows float32 make them NaN.
+"""
+import json
+from pathlib import Path
+
+import numpy as np
+import onnx
+from onnx import TensorProto, helper
+
+CHANNELS = ["a_ohm", "b_ohm"]
+TARGETS = ["x_mm"]
+CLASSES = ["soft", "hard"]
+WINDOW_STEPS = 4
+
+
+def regression_metadata() -> dict[str, str]:
+    return {"kind": "regression", "input": "channels", "channels": json.dumps(CHANNELS),
+            "targets": json.dumps(TARGETS), "outputs": json.dumps(["prediction"])}
+
+
+def classification_metadata() -> dict[str, str]:
+    return {"kind": "classification", "input": "window", "channels": json.dumps(CHANNELS),
+            "classes": json.dumps(CLASSES), "window_steps": str(WINDOW_STEPS),
+            "outputs": json.dumps(["probabilities"])}
+
+
+def regression_model(metadata: dict | None = None) -> onnx.ModelProto:
+    weights = helper.make_tensor("weights", TensorProto.FLOAT, [len(CHANNELS), len(TARGETS)],
+                                 np.ones(len(CHANNELS) * len(TARGETS), dtype=np.float32))
+    nodes = [helper.make_node("Cast", ["channels"], ["single"], to=TensorProto.FLOAT),
+             helper.make_node("MatMul", ["single", "weights"], ["prediction"])]
+    graph = helper.make_graph(nodes, "tiny_regression",
+                              [helper.make_tensor_value_info("channels", TensorProto.DOUBLE, ["batch", len(CHANNELS)])],
+                              [helper.make_tensor_value_info("prediction", TensorProto.FLOAT, ["batch", len(TARGETS)])],
+                              [weights])
+    return _model(graph, regression_metadata() if metadata is None else metadata)
+
+
+def classification_model(metadata: dict | None = None) -> onnx.ModelProto:
+    n_in = len(CHANNELS) * WINDOW_STEPS
+    weights = helper.make_tensor("weights", TensorProto.FLOAT, [n_in, len(CLASSES)],
+                                 np.linspace(-1, 1, n_in * len(CLASSES), dtype=np.float32))
+    nodes = [helper.make_node("Flatten", ["window"], ["flat"], axis=1),
+             helper.make_node("MatMul", ["flat", "weights"], ["scores"]),
+             helper.make_node("Softmax", ["scores"], ["probabilities"], axis=1)]
+    graph = helper.make_graph(nodes, "tiny_classification",
+                              [helper.make_tensor_value_info("window", TensorProto.FLOAT,
+                                                             ["batch", len(CHANNELS), WINDOW_STEPS])],
+                              [helper.make_tensor_value_info("probabilities", TensorProto.FLOAT,
+                                                             ["batch", len(CLASSES)])],
+                              [weights])
+    return _model(graph, classification_metadata() if metadata is None else metadata)
+
+
+def _model(graph, metadata: dict) -> onnx.ModelProto:
+    model = helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18)], ir_version=10)
+    for key, value in metadata.items():
+        model.metadata_props.append(onnx.StringStringEntryProto(key=key, value=value))
+    return model
+
+
+def save(model: onnx.ModelProto, path) -> Path:
+    path = Path(path)
+    path.write_bytes(model.SerializeToString())
+    return path
