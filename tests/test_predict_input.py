@@ -1,6 +1,6 @@
 """predict.py on bad input: every case is one line on stderr naming the culprit, exit code 2 and
 no output file; nothing it writes holds a non-finite number. Models are the hand-built ones of
-tests/tiny_onnx.py (same names, dtypes and metadata keys as an export)."""
+tests/predict_support.py (same names, dtypes and metadata keys as an export)."""
 import json
 import os
 import subprocess
@@ -11,17 +11,16 @@ import numpy as np
 import pandas as pd
 import pytest
 
-import predict
 from data.errors import InputError
 from export.onnx_predictor import OnnxPredictor
-from tiny_onnx import (CHANNELS, CLASSES, WINDOW_STEPS, classification_metadata, classification_model,
-                       regression_metadata, regression_model, save)
+from predict_support import (CHANNELS, CLASSES, WINDOW_STEPS, classification_metadata, classification_model,
+                             predict_main, regression_metadata, regression_model, save)
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
 def run_main(capsys, *args) -> tuple[int, str, str]:
-    code = predict.main([str(a) for a in args])
+    code = predict_main([str(a) for a in args])
     captured = capsys.readouterr()
     return code, captured.out, captured.err
 

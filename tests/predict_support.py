@@ -1,6 +1,12 @@
-"""Tiny hand-built ONNX models with Touchstone's metadata, for predict.py's tests: built in
-milliseconds without training, with the same input and output names, dtypes and metadata keys
-that export/pipelines.py writes, and any piece of them can be made wrong on purpose.
+"""What predict.py's tests share: its main(argv), run in-process, and tiny hand-built ONNX models.
+
+`predict_main(argv)` is predict.py's main loaded from the script (runpy, as `python predict.py`
+would run it, minus the exit): the house rule is that nothing imports the entry points, and the
+in-process call lets a test run hundreds of cases in a second.
+
+The models carry Touchstone's metadata: built in milliseconds without training, with the same
+input and output names, dtypes and metadata keys that export/pipelines.py writes, and any piece
+of them can be made wrong on purpose.
 
 - regression: `channels` [batch, 2] float64 -> cast to float32 -> sum per row -> `prediction`
   [batch, 1] float32, so a float64 reading beyond float32's range makes the output inf (as the
@@ -9,11 +15,14 @@ that export/pipelines.py writes, and any piece of them can be made wrong on purp
   `probabilities` [batch, 2], so values whose sum overflows float32 make them NaN.
 """
 import json
+import runpy
 from pathlib import Path
 
 import numpy as np
 import onnx
 from onnx import TensorProto, helper
+
+predict_main = runpy.run_path(str(Path(__file__).resolve().parents[1] / "predict.py"), run_name="predict_script")["main"]
 
 CHANNELS = ["a_ohm", "b_ohm"]
 TARGETS = ["x_mm"]
