@@ -1,94 +1,118 @@
-"""Contact tracker speed: p50 and p99 of `ContactTracker.update` per frame, one thread, at 0, 1
-and 5 contacts on 6 x 6 and 12 x 21 frames, ours beside the paper's algorithm (seed 001 reports
-404.7 us per frame without contact and 627.2 us with 5 +/- 3 contacts, 12 x 21, its machine).
+"""Contact tracker speed on the scene's own frames: p50 and p99 of `ContactTracker.update` per
+frame, force included, one thread, timed by models/contact_tracking/timing.py (the timing the
+capacitive_tracking study writes into metrics.json).
 
-    OMP_NUM_THREADS=1 .venv/bin/python bench/contacts.py
-    OMP_NUM_THREADS=1 .venv/bin/python bench/contacts.py --frames 4000 --repeats 5 --grids 12x21
+    OMP_NUM_THREADS=1 .venv/bin/python bench/contacts.py                          # the MUCA's 12 x 21 grid
+    OMP_NUM_THREADS=1 .venv/bin/python bench/contacts.py --scene capacitive6x6 --runs 5
 
-Frames: a rest level with per-cell offsets and Gaussian noise (sigma 1.6 counts, the scene's
-baseline noise) plus k Gaussian bumps (peak 40-120 counts, 0.7 pitch wide) drifting slowly in
-separate lanes, so the ids persist and the tracker does its usual per-frame work. The timing
-covers `update` only (the call an application makes per frame), after a warm-up; each figure is
-the median over --repeats runs of the per-run p50 / p99.
+Streams, each simulated by the scene as `python train.py experiment=capacitive_tracking
+scene=<scene>` simulates it (all its effects):
+- sessions: the study's stream at --seed (tap, hold, glide, cross, merge and split sessions,
+  1-5 contacts);
+- 5 held: the scene's hold session alone at --five-seed, a seed whose hold draws 5 contacts
+  (checked): 5 contacts on most frames;
+- empty: the rest frames the tracker was fitted on (no contact).
+Trackers: the experiment's own parameters (configs/experiment/capacitive_tracking.yaml); ours
+with force (the study's default: the experiment's model fitted on the scene's characterisation
+presses, read through models/contact_tracking/force.py), ours with force through the pipeline's
+predict_raw (what the study did before the fold), ours without force, and the paper's algorithm
+(its segmentation and tracking, no force; seed 001 reports 404.7 us per frame without contact
+and 627.2 us with 5 +/- 3 contacts, 12 x 21, on its machine).
+
+Every tracker runs on the same frames in one process, runs alternating between trackers (the
+order reversed every other run) after one warm-up run each, so that a shared machine's load
+falls on all of them alike; each figure is the mean +/- sd over --runs runs of that run's p50 or
+p99. The load average is printed beside the numbers: on a shared machine every figure is an
+upper one, p99 most of all (a process that loses the processor for a scheduler tick, 4 ms
+here, makes that frame's time).
 """
 import argparse
 import os
 import sys
-import time
 from pathlib import Path
 
 for variable in ("OMP_NUM_THREADS", "MKL_NUM_THREADS", "OPENBLAS_NUM_THREADS"):
     os.environ.setdefault(variable, "1")
 
 import numpy as np  # noqa: E402
+from hydra import compose, initialize_config_dir  # noqa: E402
+from hydra.utils import instantiate  # noqa: E402
+from omegaconf import OmegaConf  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from models.contact_tracker import ContactTracker  # noqa: E402
-
-PAPER_US = {0: 404.7, 5: 627.2}
-CONFIGS = {"ours": dict(),
-           "paper": dict(threshold="variance", segmentation="paper", tracking="paper")}
+from models.contact_tracking.force import force_reader  # noqa: E402
+from models.contact_tracking.timing import latency_summary, timed_updates  # noqa: E402
+from models.runs.capacitive_tracking import fit_force_pipeline, make_tracker  # noqa: E402
 
 
-def synthetic_stream(rows, cols, n_contacts, n_frames, n_rest=60, pitch_mm=6.0, seed=0):
-    """(rest frames, live frames) with n_contacts drifting bumps in the live frames."""
-    rng = np.random.default_rng(seed)
-    offset = 1240.0 + rng.normal(0.0, 40.0, (rows, cols))
-    rest = offset + rng.normal(0.0, 1.6, (n_rest, rows, cols))
-    live = offset + rng.normal(0.0, 1.6, (n_frames, rows, cols))
-    if n_contacts:
-        yy, xx = np.mgrid[0:rows, 0:cols]
-        t = np.arange(n_frames)[:, None, None]
-        lanes = np.linspace(0.5, rows - 1.5, n_contacts)
-        for k in range(n_contacts):
-            # spread the contacts over the grid: columns apart, rows apart where the grid allows
-            x0 = (k + 0.5) * cols / n_contacts
-            y0 = lanes[k] if rows >= 2 * n_contacts else (k % 2) * (rows - 2) + 1.0
-            x = x0 + 0.6 * np.sin(2 * np.pi * t / 240.0 + k)
-            peak = rng.uniform(40.0, 120.0)
-            live += peak * np.exp(-((xx - x) ** 2 + (yy - y0) ** 2) / (2 * 0.7 ** 2))
-    return rest, live
+def study_config(scene: str, seed: int, overrides=()):
+    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+        return compose("config", overrides=["experiment=capacitive_tracking", f"scene={scene}", f"seed={seed}",
+                                            *overrides])
 
 
-def time_updates(tracker, live) -> np.ndarray:
-    clock = time.perf_counter_ns
-    elapsed = np.empty(len(live))
-    for i, frame in enumerate(live):
-        start = clock()
-        tracker.update(frame)
-        elapsed[i] = clock() - start
-    return elapsed / 1e3
+def streams(scene: str, seed: int, five_seed: int) -> dict:
+    """name -> (the stream, the frames to time)."""
+    sessions = instantiate(study_config(scene, seed).scene).stream()
+    held = instantiate(study_config(scene, five_seed, ["scene.sessions=[hold]"]).scene).stream()
+    most = held.truth.groupby("frame").size().max()
+    if most != 5:
+        raise SystemExit(f"--five-seed {five_seed}: the hold session draws {most} contacts, not 5; pick another seed")
+    rest = sessions.frames[:sessions.n_rest_frames]
+    return {"sessions": (sessions, sessions.frames[sessions.n_rest_frames:]),
+            "5 held": (held, held.frames[held.n_rest_frames:]),
+            "empty": (sessions, rest)}
+
+
+def trackers(cfg, repetitions: int) -> dict:
+    """name -> (tracker parameters, force function or None)."""
+    params = OmegaConf.to_container(cfg.study.trackers, resolve=True)
+    pipeline, _ = fit_force_pipeline(cfg, repetitions)
+    column = pipeline.target_names.index("force_n")
+    return {"ours, force (folded)": (params["ours"], force_reader(pipeline)),
+            "ours, force (pipeline.predict_raw)": (params["ours"], lambda w: pipeline.predict_raw(w)[0][:, column]),
+            "ours, no force": (params["ours"], None),
+            "paper, no force": (params["paper"], None)}
+
+
+def one_run(stream, frames, params, force) -> tuple[float, float, float]:
+    """p50 and p99 (us) of one run over the frames, and contacts per frame."""
+    tracker = make_tracker(stream.rows, stream.cols, stream.pitch_mm, params, force)
+    tracker.fit(stream.frames[:stream.n_rest_frames])
+    contacts, elapsed_us = timed_updates(tracker, frames)
+    summary = latency_summary(elapsed_us)
+    return summary["p50_us"], summary["p99_us"], float(np.mean([len(c) for c in contacts]))
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--frames", type=int, default=2000, help="timed frames per run")
-    parser.add_argument("--repeats", type=int, default=3)
-    parser.add_argument("--grids", nargs="*", default=["6x6", "12x21"])
-    parser.add_argument("--contacts", nargs="*", type=int, default=[0, 1, 5])
+    parser.add_argument("--scene", default="capacitive6x6_muca")
+    parser.add_argument("--seed", type=int, default=0, help="the sessions stream's seed")
+    parser.add_argument("--five-seed", type=int, default=1, help="a seed whose hold session draws 5 contacts")
+    parser.add_argument("--runs", type=int, default=5, help="timed runs per stream and tracker (>= 3 for a spread)")
+    parser.add_argument("--force-repetitions", type=int, default=10, help="presses per level and cell for the force fit")
     args = parser.parse_args(argv)
-    print(f"load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores (shared machines inflate every figure)\n")
-    print("| grid | contacts | tracker | found per frame | p50 (us) | p99 (us) | paper (us, its machine) |")
-    print("|---|---|---|---|---|---|---|")
-    for grid in args.grids:
-        rows, cols = map(int, grid.split("x"))
-        for k in args.contacts:
-            rest, live = synthetic_stream(rows, cols, k, args.frames + 200)
-            for name, params in CONFIGS.items():
-                p50s, p99s = [], []
-                for _ in range(args.repeats):
-                    tracker = ContactTracker(rows=rows, cols=cols, pitch_mm=6.0, **params).fit(rest)
-                    time_updates(tracker, live[:200])  # warm-up: imports, caches
-                    elapsed = time_updates(tracker, live[200:])
-                    p50s.append(np.percentile(elapsed, 50))
-                    p99s.append(np.percentile(elapsed, 99))
-                found = np.mean([len(tracker.update(f)) for f in live[:50]])
-                paper = PAPER_US.get(k, "") if grid == "12x21" and name == "paper" else ""
-                print(f"| {grid} | {k} | {name} | {found:.1f} | {np.median(p50s):.1f} | {np.median(p99s):.1f} | {paper} |",
-                      flush=True)
-    print(f"\nload average at end: {os.getloadavg()[0]:.1f}")
+    named_streams = streams(args.scene, args.seed, args.five_seed)
+    named_trackers = trackers(study_config(args.scene, args.seed), args.force_repetitions)
+    print(f"scene {args.scene}; load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores\n")
+    print("| stream | tracker | contacts per frame | p50 (us) | p99 (us) |")
+    print("|---|---|---|---|---|")
+    names = list(named_trackers)
+    for stream_name, (stream, frames) in named_streams.items():
+        runs = {name: [] for name in names}
+        for run in range(args.runs + 1):  # run 0 warms up; then ABCD, DCBA, ABCD, ...
+            for name in names if run % 2 == 0 else names[::-1]:
+                figures = one_run(stream, frames, *named_trackers[name])
+                if run:
+                    runs[name].append(figures)
+        for name in names:
+            p50, p99, found = np.array(runs[name]).T
+            print(f"| {stream_name} | {name} | {found[0]:.1f} | {p50.mean():.1f} ± {p50.std(ddof=1):.1f} | "
+                  f"{p99.mean():.1f} ± {p99.std(ddof=1):.1f} |", flush=True)
+    print(f"\n{args.runs} runs each (mean ± sd of the per-run figures); load average at end: "
+          f"{os.getloadavg()[0]:.1f}")
 
 
 if __name__ == "__main__":

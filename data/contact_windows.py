@@ -4,7 +4,7 @@ A touch controller reads a contact's force from the cells around its peak (seed 
 to the pressed cell's RMC, sec. 3.5; a touch between crossings shares its load with the
 neighbours, so the window is the steadier reading). One definition serves both sides: the
 scene's characterisation presses (`characterisation_channels: window`, the training rows of the
-force model) and the contact tracker (models/contact_tracker.py, the same window around each
+force model) and the contact tracker (models/contact_tracking/, the same window around each
 contact's peak cell), so a force model fitted on the presses reads the tracker's windows
 unchanged. Cells outside the grid point at a padding index (rows * cols) whose load is 0.
 """

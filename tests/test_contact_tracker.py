@@ -1,4 +1,4 @@
-"""The contact tracker (models/contact_tracker.py): estimator contract, behaviour on synthetic
+"""The contact tracker (models/contact_tracking/): estimator contract, behaviour on synthetic
 streams (Gaussian bumps moving on a grid), the paper's algorithm as published, hard cases as
 property tests, and bad input as one-line InputErrors."""
 import numpy as np
@@ -12,10 +12,17 @@ from sklearn.preprocessing import MinMaxScaler
 from skimage.filters import threshold_otsu
 from skimage.measure import label
 
+from data.contact_windows import window_channel_names
 from data.errors import InputError
-from models.contact_tracker import ContactTracker
-from models.otsu_threshold import otsu_threshold
-from models.paper_contact_tracking import paper_track_clusters
+from data.features import compute_features, feature_names
+from models.classic_regressors import ClassicRegressor
+from models.contact_tracking import ContactTracker
+from models.contact_tracking.force import force_reader, is_affine
+from models.contact_tracking.timing import latency_summary, timed_updates
+from models.contact_tracking.otsu_threshold import otsu_threshold
+from models.contact_tracking.paper import track_clusters
+from models.contact_tracking.tracks import new_track, remember
+from models.deployable import RegressionPipeline
 from models.report.tracking_metrics import evaluate_tracking, frame_groups
 
 PITCH = 6.0
@@ -60,7 +67,8 @@ def test_estimator_contract():
     rest, _ = stream(6, 6, [])
     assert tracker.fit(rest) is tracker
     learned = [k for k in vars(tracker) if k.endswith("_") and not k.startswith("__")]
-    assert {"mean_", "spread_", "threshold_", "tracks_"} <= set(learned)
+    assert {"baseline_", "grid_", "tracks_"} <= set(learned)
+    assert tracker.mean_ is tracker.baseline_.mean and tracker.threshold_ is tracker.baseline_.threshold
     assert set(vars(tracker)) - set(learned) == set(tracker.get_params())
 
 
@@ -172,6 +180,55 @@ def test_force_from_a_callable_or_a_fitted_regressor():
     assert np.isnan(plain.force_n).all()
 
 
+def test_force_is_read_once_per_frame_for_all_its_contacts():
+    frames = [[(9.0, 9.0, 80.0), (27.0, 27.0, 60.0)]] * 3 + [[]] + [[(9.0, 9.0, 80.0)]]
+    rest, live = stream(6, 6, frames)
+    calls = []
+
+    def force(windows):
+        calls.append(np.array(windows))
+        return windows.sum(axis=1) / 100.0
+    results = run(ContactTracker(rows=6, cols=6, pitch_mm=PITCH, force_model=force, force_feature="window"), rest, live)
+    assert [len(c) for c in calls] == [len(r) for r in results if len(r)] == [2, 2, 2, 1]
+    for windows, result in zip(calls, [r for r in results if len(r)]):
+        assert windows.shape[1] == 9 and np.allclose(result.force_n, windows.sum(axis=1) / 100.0)
+        assert np.allclose(windows[:, 4], result.peak_load)                  # position 4: the peak cell itself
+
+
+def window_pipeline(kind, groups=("raw",), targets=("force_n",), seed=0):
+    """A regression pipeline fitted on random 3 x 3 windows, as the study's force model."""
+    rng = np.random.default_rng(seed)
+    windows = rng.uniform(0.0, 150.0, (200, 9))
+    y = np.stack([windows @ rng.uniform(0.0, 0.03, 9) + 0.1 * np.sqrt(windows).sum(axis=1) + k
+                  for k in range(len(targets))], axis=1)
+    features = compute_features(windows, list(groups))
+    mean, scale = features.mean(axis=0), features.std(axis=0)
+    model = ClassicRegressor(kind=kind).fit((features - mean) / scale, y)
+    names = window_channel_names()
+    return RegressionPipeline(names, list(targets), list(groups), feature_names(names, list(groups)), mean, scale, model)
+
+
+@pytest.mark.parametrize("kind, groups, folded", [
+    ("linear_regression", ("raw",), True), ("svr", ("raw",), True),
+    ("linear_regression", ("raw", "sqrt"), False), ("gaussian_process", ("raw",), False)])
+def test_force_reader_folds_an_affine_pipeline_and_calls_any_other(kind, groups, folded):
+    pipeline = window_pipeline(kind, groups, targets=("x_mm", "force_n"))
+    windows = np.random.default_rng(1).uniform(-5.0, 200.0, (7, 9))
+    expected = pipeline.predict_raw(windows)[0][:, 1]
+    assert is_affine(pipeline) == folded
+    assert force_reader(pipeline)(windows) == pytest.approx(expected, rel=1e-9, abs=1e-9)
+
+
+def test_timed_updates_returns_each_frames_contacts_and_its_time():
+    rest, live = stream(6, 6, [[(15.0, 15.0, 70.0)]] * 4 + [[]] * 2)
+    found, elapsed_us = timed_updates(ContactTracker(rows=6, cols=6, pitch_mm=PITCH).fit(rest), live)
+    plain = run(ContactTracker(rows=6, cols=6, pitch_mm=PITCH), rest, live)
+    assert [f.ids.tolist() for f in found] == [p.ids.tolist() for p in plain] == [[1]] * 4 + [[]] * 2
+    assert elapsed_us.shape == (6,) and (elapsed_us > 0).all()
+    assert latency_summary(np.arange(1.0, 101.0)) == {"p50_us": 50.5, "p99_us": pytest.approx(99.01), "frames": 100}
+    assert np.isnan(latency_summary(np.zeros(0))["p50_us"])
+
+
 def test_following_drift_keeps_a_creeping_baseline_from_becoming_a_contact():
     rest, live = stream(6, 6, [[]] * 200)
     live = live + np.linspace(0.0, 30.0, 200)[:, None, None]          # slow common drift
@@ -209,9 +266,9 @@ def test_paper_tracking_renumbers_one_to_n():
     cells = lambda *sets: np.array([[c in s for c in range(10)] for s in sets])  # noqa: E731
     prev_ids, prev = np.array([1, 2, 3]), cells({0, 1}, {4, 5}, {8, 9})
     # the middle contact lifts: the third is renumbered 3 -> 2 (an identity switch)
-    assert paper_track_clusters(prev_ids, prev, np.array([1, 2]), cells({0, 1}, {8, 9})).tolist() == [1, 2]
+    assert track_clusters(prev_ids, prev, np.array([1, 2]), cells({0, 1}, {8, 9})).tolist() == [1, 2]
     # a new cluster takes the next label after matching ones, then 1..n
-    assert paper_track_clusters(np.array([1]), cells({0, 1}), np.array([1, 2]), cells({6}, {0})).tolist() == [2, 1]
+    assert track_clusters(np.array([1]), cells({0, 1}), np.array([1, 2]), cells({6}, {0})).tolist() == [2, 1]
 
 
 def between_class_variance(values, upper):
@@ -418,13 +475,12 @@ def test_a_merge_remembers_the_velocity_of_the_path_not_of_the_last_pull():
     # a contact gliding +1 mm/frame along x whose centroid is pulled 2 mm sideways on the two
     # frames before it merges (a neighbour's load): the remembered velocity is the slope over
     # its last frames, so it still points along x (the running average would not)
-    from models.contact_tracker import _Track
-    track = _Track(1, 0, None, 0.0, 18.0, 4.0)
+    track = new_track(1, 0, np.ones(4, dtype=np.float32), 0.0, 18.0, 4)
     for frame in range(1, 10):
         y = 18.0 if frame < 8 else 16.0
         track.vy = 0.7 * track.vy + 0.3 * (y - track.y)
         track.x, track.y = float(frame), y
         track.path.append((frame, track.x, y))
-    _, _, x, y, vx, vy, _ = track.snapshot(9)
-    assert vx == pytest.approx(1.0, abs=0.05)
-    assert abs(vy) < 0.25 < abs(track.vy)
+    member = remember(track, 9)
+    assert member.vx == pytest.approx(1.0, abs=0.05)
+    assert abs(member.vy) < 0.25 < abs(track.vy)

@@ -31,7 +31,6 @@ pipeline.pkl>` of such a run (`python train.py experiment=capacitive_force hydra
 scene.characterisation_channels=window`), or `none`.
 """
 import sys
-import time
 from pathlib import Path
 
 import numpy as np
@@ -43,7 +42,9 @@ from data.atomic import atomic_write_json, atomic_write_text
 from data.contact_streams import ContactStream, check_grid, frames_from_lines, load_frames
 from data.contact_windows import window_channel_names
 from data.errors import InputError
-from models.contact_tracker import ContactTracker
+from models.contact_tracking import ContactTracker
+from models.contact_tracking.force import force_reader
+from models.contact_tracking.timing import latency_summary, timed_updates
 from models.deployable import load_pipeline
 from models.report.contact_animation import write_contact_animation
 from models.report.tensorboard_logger import TensorBoardLogger
@@ -97,12 +98,6 @@ def load_force_pipeline(path: str):
                       "loaded_from": str(path)}
 
 
-def force_reader(pipeline):
-    """Contacts' windows (n, 9) -> force_n through the pipeline (its features, scaler and model)."""
-    column = pipeline.target_names.index("force_n")
-    return lambda windows: pipeline.predict_raw(windows)[0][:, column]
-
-
 def make_tracker(rows: int, cols: int, pitch_mm: float, params: dict, force_pipeline) -> ContactTracker:
     """A tracker with the study's parameters, reading force through the pipeline when given one."""
     if force_pipeline is not None:
@@ -139,24 +134,15 @@ def track(stream: ContactStream, params: dict, force_pipeline, keep_images: bool
     tracker = make_tracker(stream.rows, stream.cols, stream.pitch_mm, params, force_pipeline)
     tracker.fit(stream.frames[:stream.n_rest_frames])
     live = stream.frames[stream.n_rest_frames:]
-    records, elapsed_ns = [], np.zeros(len(live))
-    labels = np.zeros(live.shape, dtype=np.int64) if keep_images else None
-    clock = time.perf_counter_ns
-    for index, frame in enumerate(live):
-        start = clock()
-        contacts = tracker.update(frame)
-        elapsed_ns[index] = clock() - start
-        if len(contacts):
-            records.extend(contacts.records())
-            if keep_images:
-                labels[index] = contacts.labels
+    found, elapsed_us = timed_updates(tracker, live)
+    records = [record for contacts in found for record in contacts.records()]
+    labels = np.array([contacts.labels for contacts in found], dtype=np.int64).reshape(live.shape) if keep_images else None
     table = pd.DataFrame(records, columns=["frame", "id", "x_mm", "y_mm", "cells", "area_mm2", "mean_load",
                                            "peak_load", "force_n"])
     table["frame"] += stream.n_rest_frames
-    timing = {"p50_us": float(np.percentile(elapsed_ns, 50) / 1e3) if len(live) else float("nan"),
-              "p99_us": float(np.percentile(elapsed_ns, 99) / 1e3) if len(live) else float("nan"),
-              "frames": int(len(live)),
-              "note": "inside the study run, beside other work: bench/contacts.py measures speed"}
+    timing = {**latency_summary(elapsed_us),
+              "note": "update per frame (force included when the run has a force model), timed as bench/contacts.py "
+                      "times it, inside the run"}
     images = None
     if keep_images:
         grid = (stream.rows, stream.cols)

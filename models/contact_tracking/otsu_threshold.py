@@ -1,6 +1,6 @@
 """Otsu's threshold on the few values of one frame, exactly (no histogram).
 
-Used by the contact tracker (models/contact_tracker.py) to cut each frame's grey image; kept
+Used by the contact tracker's detection (detection.py) to cut each frame's grey image; kept
 apart because it is a general image-thresholding step, tested on its own against scikit-image.
 """
 import functools

@@ -1,6 +1,5 @@
-"""What the contact tracker (models/contact_tracker.py) returns for one frame: its contacts as
-parallel arrays, kept apart from the tracker because applications read it without caring how
-the contacts were found."""
+"""What the contact tracker returns for one frame: its contacts as parallel arrays, kept apart
+from the tracker's steps because applications read it without caring how the contacts were found."""
 import numpy as np
 
 
