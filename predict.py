@@ -75,8 +75,14 @@ def write(result, output: Path) -> None:
         atomic_write(output, lambda tmp: result.to_parquet(tmp, index=False) if parquet
                      else result.to_csv(tmp, index=False))
     except OSError as error:  # e.g. a read-only file system, a full disk, permissions root ignores
-        where = f" {error.filename}" if error.filename else ""
-        raise InputError(f"output={output}: cannot write{where} ({error.strerror or type(error).__name__})") from None
+        culprit = Path(error.filename) if error.filename else output
+        if culprit in output.parents:
+            what = f"create folder {culprit}"
+        elif culprit.parent == output.parent and culprit != output:  # the temporary file written beside it
+            what = f"create a file in {output.parent}"
+        else:
+            what = f"write {culprit}"
+        raise InputError(f"output={output}: cannot {what} ({error.strerror or type(error).__name__})") from None
 
 
 def main(argv=None) -> int:

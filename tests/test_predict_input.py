@@ -162,7 +162,7 @@ def test_output_equal_to_the_model_is_refused(sample, models, capsys):
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="/proc and /sys are Linux's")
 @pytest.mark.parametrize("output, fragments", [
     ("{tmp}/pass.csv/pred.csv", ["pass.csv is a file, not a folder"]),  # parent is a file
-    ("/proc/touchstone/pred.csv", ["cannot write /proc/touchstone"]),  # a parent nobody can create
+    ("/proc/touchstone/pred.csv", ["cannot create folder /proc/touchstone"]),  # a parent nobody can create
     ("/sys/touchstone_pred.csv", ["/sys"]),  # a folder nobody may create files in, root included
     ("{tmp}", ["is a folder; name a file in it"]),
     ("{tmp}/", ["is a folder; name a file in it"]),
