@@ -43,7 +43,7 @@ def train_and_export(family, folder):
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
         cfg = compose("config", overrides=overrides)
     run(cfg, folder)
-    return export_run(folder), load_pipeline(Path(folder) / "pipeline.pkl")
+    return export_run(folder), load_pipeline(Path(folder) / "pipeline.npz")
 
 
 def parity(path, pipeline):

@@ -1,4 +1,4 @@
 """ONNX export of Touchstone's deployable pipelines, and their onnxruntime side.
 
-export/ reads what models/ produced (a run's pipeline.pkl) and never the other way round.
+export/ reads what models/ produced (a run's pipeline.npz) and never the other way round.
 """

@@ -24,7 +24,7 @@ from data.atomic import atomic_write_json
 from data.errors import InputError
 from data.progress import progress
 from export.onnx_predictor import OnnxPredictor
-from models.deployable import RegressionPipeline, load_pipeline
+from models.deployable import PIPELINE_FILE, RegressionPipeline, load_pipeline
 
 log = logging.getLogger(__name__)
 
@@ -102,7 +102,7 @@ def record_costs(run_dir, model_file: str = "model.onnx", budget_s: float = 1.0)
     run_dir = Path(run_dir)
     if not budget_s > 0:
         raise InputError(f"cost.budget_s must be a positive number of seconds, got {budget_s}")
-    cost = measure(load_pipeline(run_dir / "pipeline.pkl"), run_dir / model_file, budget_s)
+    cost = measure(load_pipeline(run_dir / PIPELINE_FILE), run_dir / model_file, budget_s)
     metrics = json.loads((run_dir / "metrics.json").read_text())
     metrics.setdefault("cost", {}).update(cost)
     atomic_write_json(run_dir / "metrics.json", metrics)

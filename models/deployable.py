@@ -5,19 +5,22 @@ decimation and channel scaling) with the fitted model, so that `predict_raw` on 
 is the eager reference that the exported ONNX graph must match. A regression model trained on
 min-max normalised channels (scene rubber12_lab) takes raw readings all the same: the pipeline
 keeps the data set's normalisation and applies it before the features. Runs save it as
-`pipeline.pkl` in their output folder; export/ turns it into one ONNX file.
+`pipeline.npz` in their output folder, in a format that cannot run code when loaded
+(models/fitted_state.py); export/ turns it into one ONNX file.
 """
-import pickle
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
-from data.atomic import atomic_write
+from data.errors import InputError
 from data.features import compute_features, enabled_groups
 from data.minmax_scaling import MinMaxScaling
 from data.physics.force_sensing_resistor import CALIBRATION_KEYS, calibrated_channel_name, fsr_force_n
 from data.windows import decimate
+from models.fitted_state import load_fitted, save_fitted
+
+PIPELINE_FILE = "pipeline.npz"  # in a run folder
 
 
 @dataclass
@@ -107,9 +110,12 @@ def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:
 
 
 def save_pipeline(pipeline, path) -> Path:
-    return atomic_write(path, lambda tmp: tmp.write_bytes(pickle.dumps(pipeline)))
+    return save_fitted(pipeline, path)
 
 
 def load_pipeline(path):
-    with open(path, "rb") as handle:
-        return pickle.load(handle)
+    """A saved pipeline; InputError (one line) for a file that is not one."""
+    pipeline = load_fitted(path)
+    if not isinstance(pipeline, (RegressionPipeline, TimeSeriesPipeline)):
+        raise InputError(f"{path}: holds a {type(pipeline).__name__}, not a deployable pipeline")
+    return pipeline

@@ -47,6 +47,8 @@ SCHEDULES = ("milestones", "plateau")
 RESUME_KEYS = ("optimizer", "lr", "momentum", "weight_decay", "lr_schedule", "milestones", "gamma", "lr_factor",
                "lr_plateau_patience", "min_lr", "early_stopping_patience", "batch_size", "max_batch_fraction",
                "recalibrate_batchnorm", "seed")
+CHECKPOINT_KEYS = ("fingerprint", "epoch", "stopped", "elapsed_s", "module", "optimiser", "schedule", "best",
+                   "best_state", "waited", "history", "generator", "torch_rng", "cuda_rng")
 
 
 class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
@@ -152,7 +154,8 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
 
     def _save_checkpoint(self, state: dict):
         """Written to a temporary file and renamed, so a run killed while saving keeps the
-        previous epoch's checkpoint."""
+        previous epoch's checkpoint. Holds tensors and plain values only (numbers, strings,
+        lists, tuples, dicts), so that resuming reads it with torch.load(weights_only=True)."""
         path = Path(self.checkpoint_path)
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(path.name + ".tmp")
@@ -165,8 +168,15 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             path = path / "checkpoint" / "last.pt" if (path / "checkpoint").is_dir() else path / "last.pt"
         if not path.is_file():
             raise InputError(f"trainer.resume_from: no checkpoint at {path}")
-        state = torch.load(path, map_location="cpu", weights_only=False)
-        saved = state.get("fingerprint", {})
+        try:  # weights_only: tensors and plain values only; a pickle that would run code is refused unread
+            state = torch.load(path, map_location="cpu", weights_only=True)
+        except Exception as error:
+            raise InputError(f"trainer.resume_from: {path} is not a readable checkpoint (torch.load with "
+                             f"weights_only=True refused it: {type(error).__name__})") from None
+        missing = sorted(set(CHECKPOINT_KEYS) - set(state)) if isinstance(state, dict) else ["everything"]
+        if missing:
+            raise InputError(f"trainer.resume_from: {path} is not a Touchstone checkpoint (no {missing[0]!r})")
+        saved = state["fingerprint"]
         differs = sorted(k for k in fingerprint if saved.get(k) != fingerprint[k])
         if differs:
             raise InputError(f"trainer.resume_from: the checkpoint {path} was written by another configuration "

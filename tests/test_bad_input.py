@@ -124,7 +124,7 @@ def lab_run(tmp_path_factory):
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
         cfg = compose(config_name="config", overrides=overrides)
     run(cfg, out)
-    return cfg, export_run(out), load_pipeline(out / "pipeline.pkl")
+    return cfg, export_run(out), load_pipeline(out / "pipeline.npz")
 
 
 def lab_scene(cfg, normalised: bool):

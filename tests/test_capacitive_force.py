@@ -67,7 +67,7 @@ def force_runs(tmp_path_factory):
                 "experiment=capacitive_force", f"model={model}", "scene.n_repetitions=12",
                 "scene.force_levels_n=[0.1,0.5,1.0,2.0,3.0]", "++model.max_train_samples=200"])
         metrics = run(cfg, out)
-        runs[model] = (metrics, export_run(out), load_pipeline(out / "pipeline.pkl"), out)
+        runs[model] = (metrics, export_run(out), load_pipeline(out / "pipeline.npz"), out)
     return runs
 
 

@@ -11,6 +11,7 @@ from PIL import Image
 
 from data.contact_streams import save_frames_csv
 from data.errors import InputError
+from export.run_export import export_run
 from models.runs.capacitive_tracking import load_stream
 from models.runs.run import run
 
@@ -77,20 +78,21 @@ def test_bad_recordings_are_one_line_errors_and_write_nothing(compose_config, tm
 
 
 def test_a_saved_window_force_model_serves_the_tracker(compose_config, tmp_path):
-    """A capacitive_force run on window channels saves a pipeline the tracker reads force with;
-    a pipeline of another sensor's channels is a one-line error."""
+    """A capacitive_force run on window channels exports a model the tracker reads force with;
+    a model of other channels is a one-line error."""
     force_run = tmp_path / "force"
     run(compose_config(["experiment=capacitive_force", "hydra.mode=RUN", "model=linear_regression",
-                        "scene.characterisation_channels=window", "scene.n_repetitions=3", "export=none",
-                        "extras=quick"]), force_run)
+                        "scene.characterisation_channels=window", "scene.n_repetitions=3", "extras=quick"]), force_run)
+    export_run(force_run)
     out = tmp_path / "track"
     metrics = run(compose_config(TINY + [f"study.force_model={force_run}"]), out)
-    assert metrics["force_model"]["loaded_from"].endswith("pipeline.pkl")
+    assert metrics["force_model"]["loaded_from"].endswith("model.onnx")  # the exported model, not a pickle
     contacts = pd.read_csv(out / "contacts.csv")
     assert contacts.force_n.notna().all() and contacts.force_n.between(-0.5, 5.0).all()
     cells_run = tmp_path / "cells"
     run(compose_config(["experiment=capacitive_force", "hydra.mode=RUN", "model=linear_regression",
-                        "scene.n_repetitions=3", "export=none", "extras=quick"]), cells_run)
+                        "scene.n_repetitions=3", "extras=quick"]), cells_run)
+    export_run(cells_run)
     with pytest.raises(InstantiationException, match="3x3 window"):
         run(compose_config(TINY + [f"study.force_model={cells_run}"]), tmp_path / "bad")
 

@@ -32,7 +32,7 @@ def test_random_presses_train_report_and_export_through_the_pipeline(compose_con
 
     # fresh presses of the same sensor, read as the deployed model would read them
     presses = instantiate(cfg.scene, n_samples=16, session=1).generate().channels
-    predictor, pipeline = OnnxPredictor(export_run(tmp_path)), load_pipeline(tmp_path / "pipeline.pkl")
+    predictor, pipeline = OnnxPredictor(export_run(tmp_path)), load_pipeline(tmp_path / "pipeline.npz")
     onnx_out = predictor.predict_array(presses)
     reference, half = pipeline.predict_raw(presses)
     assert onnx_out["prediction"].shape == (16, 3) and np.isfinite(onnx_out["prediction"]).all()

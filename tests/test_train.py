@@ -37,7 +37,7 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
     cfg = compose_config(tiny(model))
     # The leftover check below must be able to fail: a temp name made by data/atomic.py's rule
     # for each kind of output is caught by it.
-    for name in ("metrics.json", "predictions.csv", "parity.png", "pipeline.pkl"):
+    for name in ("metrics.json", "predictions.csv", "parity.png", "pipeline.npz"):
         target = tmp_path / name
         fd, temp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=target.suffix, dir=target.parent)
         os.close(fd)
@@ -155,5 +155,5 @@ def test_a_run_that_fails_late_leaves_nothing_that_looks_finished(tmp_path, fail
     left = sorted(p.name for p in run_dir.iterdir())
     assert "error.txt" in left and (run_dir / "error.txt").read_text().strip()
     # training and the report succeeded before the failure, yet no finished-run artefact is left
-    for artefact in ("metrics.json", "pipeline.pkl", "model.onnx", "predictions.csv", "tensorboard", ".staging"):
+    for artefact in ("metrics.json", "pipeline.npz", "model.onnx", "predictions.csv", "tensorboard", ".staging"):
         assert artefact not in left, (failing_step, left)

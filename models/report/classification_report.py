@@ -1,6 +1,6 @@
 """The report of a classification run: confusion matrices for validation and test (PNG and
 TensorBoard), final scalars and hyper-parameters, predictions.csv (with class probabilities),
-pipeline.pkl, metrics.json and the log line. Validation is what runs are chosen on; test, never used for choosing, is reported
+pipeline.npz, metrics.json and the log line. Validation is what runs are chosen on; test, never used for choosing, is reported
 beside it so the number a reader quotes is an honest one."""
 import logging
 from pathlib import Path
@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 
 from data.atomic import atomic_write, atomic_write_json
-from models.deployable import save_pipeline
+from models.deployable import PIPELINE_FILE, save_pipeline
 from models.report import plots
 
 log = logging.getLogger(__name__)
@@ -55,7 +55,7 @@ def write_classification_report(result, output_dir, logger) -> None:
     for split, figure in figures.items():
         atomic_write(output_dir / FIGURE_FILES[split], lambda tmp, fig=figure: fig.savefig(tmp, dpi=110, format="png"))
         plots.plt.close(figure)
-    save_pipeline(result.pipeline, output_dir / "pipeline.pkl")
+    save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
     atomic_write_json(output_dir / "metrics.json", metrics)
     val, test = metrics["val"], metrics["test"]
     log.info("%s (%d parameters) fitted in %.1f s: validation accuracy %.4f (macro-F1 %.4f, loss %.4f, by level %s); "

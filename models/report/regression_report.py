@@ -1,5 +1,5 @@
 """The report of a regression run: one call turns a RegressionResult into figures, TensorBoard
-scalars and hyper-parameters, predictions.csv, pipeline.pkl, metrics.json and log lines.
+scalars and hyper-parameters, predictions.csv, pipeline.npz, metrics.json and log lines.
 
 Nothing here fits or predicts: models/runs/regression.py computed everything.
 """
@@ -9,7 +9,7 @@ from pathlib import Path
 import pandas as pd
 
 from data.atomic import atomic_write, atomic_write_json
-from models.deployable import save_pipeline
+from models.deployable import PIPELINE_FILE, save_pipeline
 from models.report import plots
 from models.report.analysis import format_ablation
 from models.report.metrics import format_table
@@ -90,6 +90,6 @@ def write_regression_report(result, output_dir, logger, feature_names) -> None:
     for name, figure in figures.items():
         atomic_write(output_dir / f"{name}.png", lambda tmp, f=figure: f.savefig(tmp, dpi=110, format="png"))
         plots.plt.close(figure)
-    save_pipeline(result.pipeline, output_dir / "pipeline.pkl")
+    save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
     atomic_write_json(output_dir / "metrics.json", result.metrics)
     _log_summary(result.metrics, output_dir)
