@@ -7,8 +7,7 @@ the total score: an overlap of Jaccard >= `min_jaccard` with the track's last ce
 1 + Jaccard, in (1, 2]; a pair without enough overlap may still match by distance, scoring in
 (0, 1] when the detection lies within `gate_mm` of the track's predicted centroid (a fast move)
 or of its last one, whichever is nearer (a light touch's centroid jumps between crossings, and
-its velocity estimate is then noise); 0 is no match. Any overlap match outranks any distance
-match, so a frame in which every track overlaps one detection is settled by overlap alone.
+its velocity estimate is then noise); 0 is no match.
 """
 from dataclasses import dataclass
 
