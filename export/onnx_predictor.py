@@ -36,6 +36,7 @@ class OnnxPredictor:
         if Path(path).stat().st_size == 0:
             raise InputError(f"{path}: model file is empty")
         options = ort.SessionOptions()
+        options.log_severity_level = 4  # onnxruntime's own error log line would be a second line on stderr
         if threads is None:
             threads = configured_threads()
         if threads:
@@ -129,7 +130,8 @@ class OnnxPredictor:
         if bad.any():
             index = tuple(int(i) for i in np.argwhere(bad)[0])
             value = values[index]
-            problem = (f"{value:g}, beyond the model's {self.input_dtype.name} range (±{np.finfo(self.input_dtype).max:.4g})"
+            largest = np.finfo(self.input_dtype).max
+            problem = (f"{value:g}, beyond the model's {self.input_dtype.name} range (±{largest:.4g})"
                        if np.isfinite(value) else f"{value} (not finite)")
             raise InputError(f"{locate(index)} has {problem}")
         return cast
@@ -139,8 +141,8 @@ class OnnxPredictor:
         try:
             results = self.session.run(None, {INPUT_NAME[self.kind]: values})
         except Exception as error:  # onnxruntime's own error types: a graph that cannot run this input
-            message = str(error).strip().splitlines()[0] if str(error).strip() else ""
-            raise InputError(f"{self.path}: the model failed to run ({type(error).__name__}: {message[:200]})") from None
+            message = str(error).strip().splitlines()[0][:200] if str(error).strip() else ""
+            raise InputError(f"{self.path}: the model failed to run ({type(error).__name__}: {message})") from None
         out = {}
         for name, result in zip(self.outputs, results):
             result = np.asarray(result)
@@ -198,7 +200,8 @@ class OnnxPredictor:
         if n == 0:
             raise InputError(f"{source}: {len(signal)} rows is shorter than the model's window of {steps} steps")
         windows = np.ascontiguousarray(signal[:n * steps].reshape(n, steps, len(self.channels)).transpose(0, 2, 1))
-        proba = self._run(windows, lambda k: f"{source}: the window starting at {where(source, k * steps)}")["probabilities"]
+        window = lambda k: f"{source}: the window starting at {where(source, k * steps)}"  # noqa: E731
+        proba = self._run(windows, window)["probabilities"]
         result = pd.DataFrame(proba, columns=[f"p_{c}" for c in self.classes])
         result.insert(0, "predicted", np.asarray(self.classes)[proba.argmax(axis=1)])
         result.insert(0, "start_row", np.arange(n) * steps)
@@ -207,4 +210,5 @@ class OnnxPredictor:
 
 def _fits(shape, expected) -> bool:
     """A graph's (batch, ...) shape against the expected trailing dims; a named (dynamic) dim fits any."""
-    return len(shape) == len(expected) + 1 and all(not isinstance(d, int) or d == e for d, e in zip(shape[1:], expected))
+    return len(shape) == len(expected) + 1 and all(not isinstance(d, int) or d == e
+                                                   for d, e in zip(shape[1:], expected))

@@ -215,7 +215,8 @@ METADATA_CASES = [
     ("classification", replaced(CLS, "window_steps", "0"), "metadata 'window_steps' must be a positive whole number"),
     ("classification", replaced(CLS, "window_steps", "-4"), "metadata 'window_steps' must be a positive whole number"),
     ("classification", replaced(CLS, "window_steps", "4.0"), "metadata 'window_steps' must be a positive whole number"),
-    ("classification", replaced(CLS, "window_steps", "8"), "but metadata 'channels' and window_steps say (batch, 2, 8)"),
+    ("classification", replaced(CLS, "window_steps", "8"),
+     "but metadata 'channels' and window_steps say (batch, 2, 8)"),
     ("regression", replaced(REG, "channels", json.dumps(CHANNELS + ["c_ohm"])), "metadata 'channels' say (batch, 3)"),
     ("regression", replaced(REG, "targets", '["x_mm", "y_mm"]'), "metadata 'targets' names 2"),
     ("classification", replaced(CLS, "classes", '["soft"]'), "metadata 'classes' names 1"),
@@ -238,6 +239,21 @@ def test_malformed_metadata_is_one_line_naming_file_and_key(tmp_path, capsys, ki
     code, _, err = run_main(capsys, f"model={model}", f"input={tmp_path / 'in.csv'}", f"output={out}")
     assert_one_line_error(code, err, f"{model}: ", fragment)
     assert not out.exists()
+
+
+def test_a_graph_that_fails_on_the_input_is_one_line(tmp_path):
+    """A graph with a named (dynamic) channel axis cannot be checked against its metadata when it
+    is opened; one whose metadata list three channels for weights that take two fails when it
+    runs: onnxruntime's error is our one line naming the file (its own log line is silenced)."""
+    model = regression_model(replaced(REG, "channels", json.dumps(CHANNELS + ["c_ohm"])))
+    model.graph.input[0].type.tensor_type.shape.dim[1].dim_param = "n_channels"
+    save(model, tmp_path / "model.onnx")
+    pd.DataFrame({"a_ohm": [1.0], "b_ohm": [2.0], "c_ohm": [3.0]}).to_csv(tmp_path / "in.csv", index=False)
+    result = subprocess.run([sys.executable, str(ROOT / "predict.py"), "model=model.onnx", "input=in.csv",
+                             "output=o.csv"], capture_output=True, text=True, cwd=tmp_path)
+    assert_one_line_error(result.returncode, result.stderr, "error: model.onnx: the model failed to run (Fail: ",
+                          "MatMul dimension mismatch")
+    assert not (tmp_path / "o.csv").exists()
 
 
 @pytest.mark.parametrize("content, fragment", [
