@@ -46,7 +46,11 @@ class OnnxPredictor:
             self.session = ort.InferenceSession(self.path, options, providers=["CPUExecutionProvider"])
         except Exception as error:  # onnxruntime's own error types: the file is not a model it can load
             raise InputError(f"{path}: not a loadable ONNX model ({type(error).__name__})") from None
-        self.metadata = self.session.get_modelmeta().custom_metadata_map
+        try:
+            self.metadata = self.session.get_modelmeta().custom_metadata_map
+            inputs, outputs = self.session.get_inputs(), self.session.get_outputs()
+        except UnicodeDecodeError:  # a damaged file: onnxruntime hands its strings over as UTF-8
+            raise InputError(f"{path}: metadata or tensor names are not UTF-8 text; re-export the run") from None
         if "kind" not in self.metadata:
             raise InputError(f"{path}: not a Touchstone model (no metadata key 'kind')")
         self.kind = self.metadata["kind"]
@@ -63,7 +67,7 @@ class OnnxPredictor:
             self.window_steps = self._positive_integer("window_steps")
             self.input_shape = (len(self.channels), self.window_steps)
             self.output_width = len(self.classes)
-        self._check_graph()
+        self._check_graph(inputs, outputs)
 
     # -- the file's metadata and graph ------------------------------------------------------
     def _value(self, key) -> str:
@@ -92,10 +96,9 @@ class OnnxPredictor:
             raise InputError(f"{self.path}: metadata '{key}' must be a positive whole number, got {text[:40]!r}")
         return int(text)
 
-    def _check_graph(self) -> None:
+    def _check_graph(self, inputs, outputs) -> None:
         """The graph takes and returns what its metadata says, so a mismatch is found here, not as
         an onnxruntime error halfway through a prediction."""
-        inputs, outputs = self.session.get_inputs(), self.session.get_outputs()
         name = INPUT_NAME[self.kind]
         if [i.name for i in inputs] != [name]:
             raise InputError(f"{self.path}: the graph takes {[i.name for i in inputs]}, expected one input '{name}' "

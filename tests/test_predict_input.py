@@ -261,6 +261,7 @@ def test_a_graph_that_fails_on_the_input_is_one_line(tmp_path):
     (b"a_ohm,b_ohm\n1,2\n", "not a loadable ONNX model"),
     (b"\x00\xff" * 50, "not a loadable ONNX model"),
     ("truncated", "not a loadable ONNX model"),
+    ("not_utf8", "metadata or tensor names are not UTF-8 text"),
     ("folder", "no such model file"),
     ("missing", "no such model file"),
 ])
@@ -269,6 +270,8 @@ def test_a_file_that_is_not_a_model_is_one_line(tmp_path, capsys, content, fragm
     if content == "truncated":
         whole = regression_model().SerializeToString()
         model.write_bytes(whole[:len(whole) // 2])
+    elif content == "not_utf8":  # one byte of the metadata value "regression" flipped, lengths intact
+        model.write_bytes(regression_model().SerializeToString().replace(b"regression", b"regr\xffssion"))
     elif content == "folder":
         model.mkdir()
     elif content != "missing":
