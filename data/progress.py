@@ -7,6 +7,7 @@ that runs longer than HEARTBEAT_S adds one line per HEARTBEAT_S so a long phase 
 
     for fold in progress(folds, desc="k-fold"): ...
     bar = progress(total=n, desc="rubber12", unit="press"); bar.update(k); bar.close()
+    bar = progress(desc="reading rig.csv", unit="rows", announce=True)   # a first line at once, too
     with phase("ONNX export"): ...
 """
 import logging
@@ -71,12 +72,17 @@ class _Quiet:
             log.info("%s: %d %s in %.1f s%s", self.desc, self.n, self.unit, seconds, last)
 
 
-def progress(iterable=None, *, desc: str, total: int | None = None, unit: str = "it", enabled: bool = True):
-    """A tqdm bar on a terminal, one log line at the end elsewhere; nothing at all when not enabled."""
+def progress(iterable=None, *, desc: str, total: int | None = None, unit: str = "it", enabled: bool = True,
+             announce: bool = False):
+    """A tqdm bar on a terminal, one log line at the end elsewhere; nothing at all when not enabled.
+    `announce`: elsewhere, also a line when the loop starts (for a loop whose first heartbeat would
+    come too late to tell the user that something is happening, such as reading a large file)."""
     if total is None and iterable is not None and hasattr(iterable, "__len__"):
         total = len(iterable)
     if enabled and on_terminal():
         return tqdm(iterable, desc=desc, total=total, unit=unit, leave=False)
+    if enabled and announce:
+        log.info("%s ...", desc)
     return _Quiet(iterable if iterable is not None else (), desc, total, unit, enabled)
 
 

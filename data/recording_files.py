@@ -20,9 +20,11 @@ import numpy as np
 import pandas as pd
 
 from data.errors import InputError
+from data.progress import progress
 from data.recordings import RecordingSet
-from data.splits import check_one_split_per_group, split_values
-from data.table_files import check_numeric_columns, read_table_file, where
+from data.splits import check_one_value_per_group, split_values
+from data.table_files import REFUSED_KINDS, check_columns_exist, check_model_values, check_numeric_columns, \
+    numeric_column, read_table_file, where
 
 # What to save instead of an object array, per array of the NPZ.
 NPZ_EXPECTED = {"X": "a numeric float array X of shape (n, channels, length)",
@@ -48,9 +50,9 @@ def _stack(arrays, source, lengths="equal"):
                          "to the longest)")
     if lengths == "pad":
         longest = max(steps)
-        return np.stack([np.pad(a, ((0, 0), (0, longest - a.shape[-1]))) for a in arrays]).astype(np.float32)
+        return np.stack([np.pad(a, ((0, 0), (0, longest - a.shape[-1]))) for a in arrays])
     shortest = min(steps)
-    return np.stack([a[:, :shortest] for a in arrays]).astype(np.float32)
+    return np.stack([a[:, :shortest] for a in arrays])
 
 
 def _sample_rate(configured, declared, source) -> float | None:
@@ -69,9 +71,15 @@ def _npz_array(archive, key, path) -> np.ndarray:
     """One array of the archive; numpy refuses an object array under allow_pickle=False."""
     try:
         return archive[key]
-    except ValueError:
+    except ValueError as error:
+        if "pickle" not in str(error):  # a damaged .npy header inside the archive
+            raise InputError(f"{path}: array '{key}' cannot be read (ValueError: {str(error)[:100]})"
+                             .splitlines()[0]) from None
         raise InputError(f"{path}: array '{key}' is an object (pickled) array, which is refused because "
                          f"loading it could run code; save {NPZ_EXPECTED[key]}") from None
+    except Exception as error:  # a damaged archive: zipfile's BadZipFile, zlib, EOFError, OSError
+        raise InputError(f"{path}: array '{key}' cannot be read ({type(error).__name__}: {str(error)[:100]})"
+                         .splitlines()[0]) from None
 
 
 def _first_bad(values, bad, name, path, problem: str) -> None:
@@ -87,6 +95,8 @@ def _check_labels(y, n, path) -> None:
         raise InputError(f"{path}: y must be one label per recording, shape ({n},), got shape {y.shape}")
     if len(y) != n:
         raise InputError(f"{path}: y has {len(y)} labels for {n} recordings")
+    if y.dtype.kind in REFUSED_KINDS and y.dtype.kind != "b":  # True/False are fine as class names
+        raise InputError(f"{path}: y holds {REFUSED_KINDS[y.dtype.kind]}; labels are class names or numbers")
     if np.issubdtype(y.dtype, np.inexact):
         _first_bad(y, np.isnan(y), "y", path, "missing (NaN)")
         _first_bad(y, ~np.isfinite(y), "y", path, "not finite ({})")
@@ -143,11 +153,12 @@ def load_npz(path, label="y", sample_rate_hz=None) -> RecordingSet:
                                                                      "sample_rate_hz") if key in archive}
     if X.ndim != 3:
         raise InputError(f"{path}: X must be (n, channels, length), got shape {X.shape}")
-    if not np.issubdtype(X.dtype, np.number):
-        raise InputError(f"{path}: X must be numeric, got dtype {X.dtype}")
+    if X.dtype.kind not in "iuf":  # complex would lose its imaginary part, booleans become 0/1: refused, not cast
+        raise InputError(f"{path}: X must be real numbers (integers or floats), got dtype {X.dtype}")
     _check_labels(y, len(X), path)
-    if not np.isfinite(X).all():
-        raise InputError(f"{path}: X contains NaN or inf")
+    if X.dtype.kind == "f" and not np.isfinite(X).all():
+        k, c, t = np.unravel_index(int(np.flatnonzero(~np.isfinite(X))[0]), X.shape)
+        raise InputError(f"{path}: X contains NaN or inf, first at X[{k}, {c}, {t}] ({X[k, c, t]})")
     names = optional.get("channel_names")
     names = [str(c) for c in names] if names is not None else [f"channel_{k}" for k in range(X.shape[1])]
     if len(names) != X.shape[1]:
@@ -158,7 +169,7 @@ def load_npz(path, label="y", sample_rate_hz=None) -> RecordingSet:
     if "split" in optional:
         labels["split"] = _npz_split(optional["split"], len(X), path)
     declared = _npz_sample_rate(optional["sample_rate_hz"], path) if "sample_rate_hz" in optional else None
-    return RecordingSet(X.astype(np.float32), names, labels, _sample_rate(sample_rate_hz, declared, path),
+    return RecordingSet(X, names, labels, _sample_rate(sample_rate_hz, declared, path),
                         {"source": "npz", "path": str(path)})
 
 
@@ -172,24 +183,60 @@ def _median_step_rate(frame, recording_column, time_column, path) -> float:
     return 1.0 / step_s
 
 
+def _check_recording_columns(frame, recording_column, label_columns, force_column, path) -> None:
+    """Every row names its recording and carries its labels (and force level), one value per
+    recording: the labels of a recording are read from one row, so a missing or changing one
+    would silently mislabel it."""
+    ids = frame[recording_column]
+    if ids.isna().any():
+        row = int(np.flatnonzero(ids.isna().to_numpy())[0])
+        raise InputError(f"{path}: recording column '{recording_column}' is empty in {where(path, row)}")
+    for column in label_columns:
+        values = frame[column]
+        if values.dtype.kind in "cMm":
+            raise InputError(f"{path}: label column '{column}' holds {REFUSED_KINDS[values.dtype.kind]}; "
+                             "labels are class names or numbers")
+        empty = values.isna() | (values.astype(str).str.strip() == "")
+        if empty.any():
+            row = int(np.flatnonzero(empty.to_numpy())[0])
+            raise InputError(f"{path}: label column '{column}' is empty in {where(path, row)}; every row needs "
+                             "its recording's label")
+        check_one_value_per_group(values.astype(str).to_numpy(), ids.to_numpy(), f"{path}: column '{column}'",
+                                  "recording", "label")
+    if force_column:
+        check_columns_exist(frame, [force_column], "force level", path)
+        levels = numeric_column(frame[force_column], force_column, "force level", path)
+        check_model_values(levels, force_column, "force level", path)
+        if (levels < 0).any():  # stored as force_level_n: newtons, whatever the column's own name
+            row = int(np.flatnonzero(levels < 0)[0])
+            raise InputError(f"{path}: force level column '{force_column}' has {levels[row]:g} in {where(path, row)}; "
+                             "a force level in newtons is >= 0")
+        check_one_value_per_group(levels, ids.to_numpy(), f"{path}: column '{force_column}'", "recording",
+                                  "force level")
+
+
 def load_long_table(path, recording_column, time_column, channel_columns, label_columns,
                     force_column=None, sample_rate_hz=None, split_column="split", lengths="equal") -> RecordingSet:
-    """One recording per id, channels in the given order, labels from its first row."""
+    """One recording per id, channels in the given order, labels from its rows (one value each)."""
+    if not list(channel_columns):
+        raise InputError("data.source.channel_columns is empty: name at least one channel column")
     frame = read_table_file(path)
     check_numeric_columns(frame, [time_column] + list(channel_columns), "channel/time", str(path))
-    needed = [recording_column] + list(label_columns) + ([force_column] if force_column else [])
+    needed = [recording_column] + list(label_columns)
     missing = [c for c in needed if c not in frame.columns]
     if missing:
         raise InputError(f"{path}: missing column(s) {', '.join(missing)}; found {', '.join(map(str, frame.columns))}")
+    _check_recording_columns(frame, recording_column, label_columns, force_column, path)
     has_split = bool(split_column) and split_column in frame.columns
     if has_split:  # every row's value checked, and one value per recording: a recording is one sample
         values = split_values(frame[split_column].to_numpy(), f"{path}: column '{split_column}'",
                               lambda row: where(path, row))
-        check_one_split_per_group(values, frame[recording_column].to_numpy(), f"{path}", "recording")
+        check_one_value_per_group(values, frame[recording_column].to_numpy(), f"{path}", "recording")
         frame = frame.assign(**{split_column: values})
     frame = frame.sort_values([recording_column, time_column], kind="stable")
     arrays, rows = [], []
-    for recording, part in frame.groupby(recording_column, sort=True):
+    parts = frame.groupby(recording_column, sort=True)
+    for recording, part in progress(parts, desc=f"recordings of {Path(path).name}", unit="recordings"):
         arrays.append(part[list(channel_columns)].to_numpy(dtype=np.float64).T)
         first = part.iloc[0]
         row = {c: first[c] for c in label_columns}

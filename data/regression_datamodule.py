@@ -4,29 +4,41 @@
 
 A held-out test split (15 % by default) is never touched in training or selection; an
 optional calibration split (for conformal intervals) and a validation split come out of the
-rest. With `split=predefined` the table's own split column says which rows are train / val /
-test; calibration and (when no val rows are declared) validation are carved from the train rows,
-grouped (data/splits.py: predefined_split).
+rest. A table that declares its rows' sides (a `split` column) is split that way by default
+(`split=auto`; `declared_split=ignore` draws instead, data/splits.py: resolve_split); calibration
+and (when no val rows are declared) validation are then carved from the train rows, grouped
+(predefined_split). Without a declared split, `auto` draws `grouped`.
+The table's values were checked when it was built (data/tables.py); the features every model
+is given are checked here to be finite in float32, naming the feature.
 Features are standardised with statistics from the training split only. Targets stay in
 physical units here: a net standardises its own targets inside `fit` and reports back in
 units, so every model sees and returns the same arrays.
 """
+import logging
+
 import numpy as np
 from sklearn.preprocessing import StandardScaler
 
 from data.features import compute_features, feature_names
+from data.progress import phase
 from data.split_settings import check_split_settings
-from data.splits import SPLIT_NOTES, holdout, predefined_split
+from data.splits import SPLIT_NOTES, holdout, predefined_split, resolve_split
 from data.errors import InputError
+from data.table_files import MODEL_DTYPE, where
 from data.tables import SensorTable, TableSource
+
+log = logging.getLogger("touchstone")
+DRAWN_SPLIT = "grouped"      # what split=auto draws when the table declares no split
+LARGE_TABLE_ROWS = 100_000   # from here on the features take seconds: their phase is logged
 
 
 class RegressionDataModule:
-    def __init__(self, source, features, split="grouped", test_fraction=0.15, val_fraction=0.15,
-                 calibration_fraction=0.0, n_folds=5, seed=0):
+    def __init__(self, source, features, split="auto", test_fraction=0.15, val_fraction=0.15,
+                 calibration_fraction=0.0, n_folds=5, seed=0, declared_split="use"):
         self.source = source
         self.features = features
-        self.split = split
+        self.split = split   # as asked; setup() replaces auto with the split it used
+        self.declared_split = declared_split
         self.test_fraction = test_fraction
         self.val_fraction = val_fraction
         self.calibration_fraction = calibration_fraction
@@ -49,11 +61,18 @@ class RegressionDataModule:
         self.feature_names = feature_names(self.channel_names, self.features)
         self.y = table.targets
 
+        self.split, self.split_source = resolve_split(self.split, table.split is not None, self.declared_split,
+                                                      DRAWN_SPLIT, table.source_name)
+        check_split_settings(self.n_folds, self.test_fraction, self.val_fraction, self.calibration_fraction,
+                             self.split)
         if self.split == "predefined":
             self._predefined_split(table)
         else:
             self._drawn_split(table)
-        self.X, self.scaler = self.features_for(self.features)
+        log.info("data split: %s; %d train, %d validation, %d calibration, %d test rows", self.split_source,
+                 self.train_idx.size, self.val_idx.size, self.cal_idx.size, self.test_idx.size)
+        with phase(f"features of {len(self.y):,} rows", enabled=len(self.y) >= LARGE_TABLE_ROWS):
+            self.X, self.scaler = self.features_for(self.features)
         return self
 
     def _predefined_split(self, table: SensorTable) -> None:
@@ -81,8 +100,23 @@ class RegressionDataModule:
         """Scaled features of every row for a choice of feature groups (used by the ablation):
         the scaler is fitted on the training rows only."""
         features = compute_features(self.table.channels, groups)
+        finite = np.isfinite(features).all(axis=1)
+        if not finite.all():  # readings like 1e308: finite, but their products and powers are not
+            row = int(np.argmin(finite))
+            path = self.table.description.get("path")
+            place = f"{path}: {where(path, row)}" if path else f"row {row + 1}"
+            raise InputError(f"{place}: channel readings {self.table.channels[row].tolist()} overflow the physics "
+                             "features (products and powers of readings beyond float64's range)")
         scaler = StandardScaler().fit(features[self.train_idx])
-        return scaler.transform(features), scaler
+        scaled = scaler.transform(features)
+        with np.errstate(over="ignore"):
+            bad = ~np.isfinite(scaled.astype(MODEL_DTYPE))
+        if bad.any():  # what the models are given, in the dtype they compute in
+            row, column = np.unravel_index(int(np.flatnonzero(bad)[0]), bad.shape)
+            name = feature_names(self.channel_names, groups)[column]
+            raise InputError(f"{self.table.source_name}: feature '{name}' of {where(self.table.source_name, row)} is "
+                             f"{features[row, column]:g}, not finite in float32 once standardised; rescale its channels")
+        return scaled, scaler
 
     def _part(self, idx):
         return self.X[idx], self.y[idx]
@@ -105,7 +139,8 @@ class RegressionDataModule:
         return self._part(self.cal_idx if self.cal_idx.size else self.val_idx)
 
     def summary(self) -> dict:
-        return {"split": self.split, "split_note": SPLIT_NOTES.get(self.split, ""), "n_train": int(self.train_idx.size), "n_val": int(self.val_idx.size),
+        return {"split": self.split, "split_note": SPLIT_NOTES.get(self.split, ""), "split_source": self.split_source,
+                "n_train": int(self.train_idx.size), "n_val": int(self.val_idx.size),
                 "n_calibration": int(self.cal_idx.size), "n_test": int(self.test_idx.size), "n_features": len(self.feature_names),
                 "channels": self.channel_names, "targets": self.target_names,
                 "source": self.table.description}

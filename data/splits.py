@@ -8,6 +8,8 @@ which overstates accuracy. `random` is the seed paper's protocol (repeats shared
 val / test): published recording sets are compared on their own test split, so a tool that
 re-splits them cannot reproduce a published figure. When no validation rows are declared,
 validation is carved from the train rows only; the test rows are never used for any choice.
+`auto` (the default) is `predefined` when the data declare a split and the drawn default
+otherwise (resolve_split): a declared split is ignored only when data.declared_split=ignore says so.
 """
 import numpy as np
 from sklearn.model_selection import (GroupKFold, GroupShuffleSplit, KFold, ShuffleSplit, StratifiedGroupKFold,
@@ -15,9 +17,11 @@ from sklearn.model_selection import (GroupKFold, GroupShuffleSplit, KFold, Shuff
 
 from data.errors import InputError
 
-SPLITS = ("random", "grouped")   # what holdout() draws; the regression datamodule also takes predefined
-REGRESSION_SPLITS = SPLITS + ("predefined",)
+SPLITS = ("random", "grouped")   # what holdout() draws; the regression datamodule also takes auto, predefined
+AUTO = "auto"                    # the data's declared split when they declare one, else the datamodule's drawn default
+REGRESSION_SPLITS = (AUTO,) + SPLITS + ("predefined",)
 PREDEFINED_VALUES = ("train", "val", "test")
+DECLARED_SPLIT_CHOICES = ("use", "ignore")   # data.declared_split: what to do with a split the data declare
 # What a reader of the figures must know about each split; metrics.json and the README carry it.
 SPLIT_NOTES = {"grouped": "every repeat of a position-depth pair on one side (no press shared)",
                "random": "the paper's protocol, repeats shared between training and test",
@@ -36,15 +40,48 @@ def holdout(indices: np.ndarray, groups: np.ndarray, fraction: float, split: str
         raise InputError(f"split fractions must lie in (0, 1), got {fraction}")
     if split == "grouped" and np.unique(groups[indices]).size < 2:
         raise InputError("data.split=grouped needs at least two distinct press points")
-    if split == "grouped":
-        splitter = GroupShuffleSplit(n_splits=1, test_size=fraction, random_state=seed)
-        kept, held = next(splitter.split(indices, groups=groups[indices]))
-    else:
-        kept, held = next(ShuffleSplit(n_splits=1, test_size=fraction, random_state=seed).split(indices))
+    try:
+        if split == "grouped":
+            splitter = GroupShuffleSplit(n_splits=1, test_size=fraction, random_state=seed)
+            kept, held = next(splitter.split(indices, groups=groups[indices]))
+        else:
+            kept, held = next(ShuffleSplit(n_splits=1, test_size=fraction, random_state=seed).split(indices))
+    except ValueError as error:  # too few rows for the share (a one-row table): scikit-learn says how many
+        raise InputError(f"data.split={split}: cannot hold out {fraction:g} of {len(indices)} row(s) "
+                         f"({str(error).splitlines()[0]})") from None
     return indices[kept], indices[held]
 
 
 # -- predefined splits -------------------------------------------------------------------------
+def resolve_split(requested: str, declared: bool, declared_split: str, drawn: str, where: str) -> tuple[str, str]:
+    """(the split a run uses, one line saying where it comes from).
+
+    A split the data declare is used by default: a user's test recordings must never slip into
+    training because a setting was left out. `data.split=auto` (the default) takes it when there
+    is one and draws `drawn` otherwise; ignoring a declared split takes `data.declared_split=ignore`;
+    asking to draw a split (data.split=grouped, stratified, ...) from data that declare one,
+    without saying to ignore it, is an error rather than a guess.
+    """
+    if declared_split not in DECLARED_SPLIT_CHOICES:
+        raise InputError(f"data.declared_split must be one of {', '.join(DECLARED_SPLIT_CHOICES)}, "
+                         f"got {declared_split!r}")
+    use = declared and declared_split == "use"
+    if requested == AUTO:
+        requested = "predefined" if use else drawn
+    elif use and requested != "predefined":
+        raise InputError(f"{where} declares its own train / val / test split, but data.split={requested} asks to "
+                         f"draw one; leave data.split at auto to use the declared split, or set "
+                         f"data.declared_split=ignore to draw {requested}")
+    elif requested == "predefined" and declared_split == "ignore":
+        raise InputError("data.split=predefined uses the split the data declare, which data.declared_split=ignore "
+                         "ignores; choose one")
+    if requested == "predefined":
+        return requested, f"the train / val / test split {where} declares (data.declared_split=ignore draws one instead)"
+    if declared:
+        return requested, f"{requested}, drawn; the split {where} declares is ignored (data.declared_split=ignore)"
+    return requested, f"{requested}, drawn ({where} declares no split)"
+
+
 def split_values(values, where: str, entry=lambda k: f"entry {k}") -> np.ndarray:
     """Declared split labels as 'train' / 'val' / 'test' (case and surrounding spaces ignored);
     anything else (a typo, 'validation', an empty or missing cell) is one line naming it and
@@ -64,19 +101,20 @@ def split_values(values, where: str, entry=lambda k: f"entry {k}") -> np.ndarray
     return cleaned.astype(str)
 
 
-def check_one_split_per_group(values, groups, where: str, what: str = "group") -> None:
-    """Every group (recording, press point) lies on one side: rows of one recording on two sides
-    would let the model see part of what it is tested on."""
+def check_one_value_per_group(values, groups, where: str, what: str = "group", value: str = "split value") -> None:
+    """Every group (recording, press point) carries one value (its split side, its label): rows of
+    one recording on two sides would let the model see part of what it is tested on, and a label
+    that changes inside a recording is not the label of one sample."""
     values, groups = np.asarray(values), np.asarray(groups)
     order = np.argsort(groups, kind="stable")
     groups_sorted, values_sorted = groups[order], values[order]
-    starts = np.flatnonzero(np.r_[True, groups_sorted[1:] != groups_sorted[:-1]])
-    for start, end in zip(starts, np.r_[starts[1:], len(groups_sorted)]):
-        sides = sorted(set(values_sorted[start:end].tolist()))
-        if len(sides) > 1:
-            name = groups_sorted[start].item() if isinstance(groups_sorted[start], np.generic) else groups_sorted[start]
-            raise InputError(f"{where}: {what} {name!r} has rows labelled "
-                             f"{' and '.join(map(str, sides))}; all rows of one {what} must carry one split value")
+    differs = (groups_sorted[1:] == groups_sorted[:-1]) & (values_sorted[1:] != values_sorted[:-1])
+    if differs.any():
+        name = groups_sorted[int(np.flatnonzero(differs)[0])]
+        sides = sorted(set(values[groups == name].tolist()), key=str)
+        name = name.item() if isinstance(name, np.generic) else name
+        raise InputError(f"{where}: {what} {name!r} has rows labelled {' and '.join(map(str, sides))}; "
+                         f"all rows of one {what} must carry one {value}")
 
 
 def _carve(train: np.ndarray, fraction: float, seed: int, groups, strata, where: str):
@@ -128,7 +166,7 @@ def predefined_split(values, val_fraction: float, seed: int, where: str, groups=
                          f"'split' column in a table (train / val / test); {where} has none")
     values = split_values(values, where)
     if groups is not None:
-        check_one_split_per_group(values, groups, where)
+        check_one_value_per_group(values, groups, where)
     train, val, test = (np.flatnonzero(values == side) for side in PREDEFINED_VALUES)
     if test.size == 0:
         raise InputError(f"data.split=predefined: {where} has no test rows (split values found: "

@@ -7,6 +7,10 @@ each row the side its source declares (train / val / test) for `data.split=prede
 file with a split column, or a scene that models a published protocol. When the channels were
 normalised from raw readings (scene rubber12_lab's min-max step), `normalisation` keeps how,
 so a model trained on them can be deployed on the raw readings.
+
+Whoever builds a SensorTable (a scene, a user's file), its channels and targets are checked on
+construction (data/table_files.py: check_model_values): finite, finite in float32, and within the
+physical range of the unit each name carries; at least one channel and one target.
 """
 from dataclasses import dataclass, field
 import numpy as np
@@ -15,7 +19,7 @@ import pandas as pd
 from data.errors import InputError
 from data.minmax_scaling import MinMaxScaling
 from data.splits import split_values
-from data.table_files import check_numeric_columns, read_table_file, where
+from data.table_files import check_columns_exist, check_model_values, numeric_column, read_table_file, where
 
 
 @dataclass
@@ -31,6 +35,20 @@ class SensorTable:
     def __post_init__(self):
         if self.split is not None and len(self.split) != len(self.frame):
             raise InputError(f"a split label per row is needed: {len(self.split)} labels for {len(self.frame)} rows")
+        source = self.source_name
+        for what, columns in (("channel", self.channel_columns), ("target", self.target_columns)):
+            if not columns:
+                raise InputError(f"{source}: no {what} columns (data.{what}_columns is empty)")
+            check_columns_exist(self.frame, columns, what, source)
+            for column in columns:
+                check_model_values(self.frame[column].to_numpy(dtype=np.float64), column, what, source)
+
+    @property
+    def source_name(self) -> str:
+        """How error messages name this table: its file, else its scene."""
+        if "path" in self.description:
+            return str(self.description["path"])
+        return f"scene {self.description['scene']}" if "scene" in self.description else "the table"
 
     @property
     def channels(self) -> np.ndarray:
@@ -56,10 +74,15 @@ class TableSource:
 
     def load(self) -> SensorTable:
         frame = read_table_file(self.path)
-        check_numeric_columns(frame, self.channel_columns, "channel", self.path)
-        check_numeric_columns(frame, self.target_columns, "target", self.path)
-        columns = self.channel_columns + self.target_columns
-        numeric = frame[columns].apply(pd.to_numeric).astype(np.float64)
+        both = sorted(set(self.channel_columns) & set(self.target_columns))
+        if both:
+            raise InputError(f"{self.path}: column(s) {', '.join(both)} listed as both channel and target "
+                             "(a model would be given the answer)")
+        numeric = {}
+        for what, columns in (("channel", self.channel_columns), ("target", self.target_columns)):
+            check_columns_exist(frame, columns, what, self.path)
+            numeric.update({c: numeric_column(frame[c], c, what, self.path) for c in columns})
+        numeric = pd.DataFrame(numeric, columns=self.channel_columns + self.target_columns)
         if self.group_columns:
             missing = [c for c in self.group_columns if c not in frame.columns]
             if missing:

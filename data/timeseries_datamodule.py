@@ -8,6 +8,9 @@ and set to the seed paper's values by the fingertip's (configs/data/fingertip.ya
   compares the channel's maximum with force levels in newtons); null: channels as recorded;
 - recordings are decimated (`decimate`, 1: none), trimmed (`trim_start`/`trim_end`, 0: none)
   and cut into windows (data/windows.py); `window_length: null` takes each recording whole;
+- `split=auto` (the default) uses the split the recordings declare (an NPZ's `split` array, a
+  table's split column) and draws `stratified` when they declare none; `declared_split=ignore`
+  draws instead (data/splits.py: resolve_split). The run logs which split it used;
 - `split=force_level` trains on the recorded levels (paper: 1, 10, 15, 25 N); the recordings at
   levels never used in training (5, 20 N) are divided by recording into validation (to choose
   with) and test (to report on), `test_fraction` of them to test. `split=stratified` holds out
@@ -21,6 +24,10 @@ and set to the seed paper's values by the fingertip's (configs/data/fingertip.ya
 - `augment` with `enabled: true` adds virtual force-level windows (Algorithm 1) to training;
 - channels are standardised with statistics of the real training windows (validation and test
   with the same ones).
+Before any training: the label has no missing value, there are at least two classes, training
+has at least two, and every class in validation or test has training windows (a model cannot
+learn a class it never sees, and would otherwise fail after the whole training); the windows
+the networks are given are finite in float32, naming the channel.
 """
 import logging
 
@@ -30,14 +37,15 @@ from sklearn.model_selection import ShuffleSplit, StratifiedShuffleSplit
 from data.errors import InputError
 from data.physics.force_sensing_resistor import calibrated_channel_name, fsr_force_n
 from data.recordings import RecordingSet
-from data.splits import SPLIT_NOTES, predefined_split
+from data.splits import AUTO, SPLIT_NOTES, predefined_split, resolve_split
 from data.virtual_force_levels import virtual_force_levels
 from data.windows import cut_windows, decimate
 
 log = logging.getLogger(__name__)
 
 
-SPLITS = ("force_level", "stratified", "predefined")
+SPLITS = (AUTO, "force_level", "stratified", "predefined")
+DRAWN_SPLIT = "stratified"   # what split=auto draws when the recordings declare no split
 
 
 def _check_fraction(name, value) -> None:
@@ -59,7 +67,8 @@ class TimeSeriesDataModule:
     def __init__(self, source, label="material", modalities=None, decimate=10, window_length=140,
                  window_step=20, trim_start=3, trim_end=3, min_variance=0.0, variance_channel=0,
                  split="force_level", train_levels=(1, 10, 15, 25), val_levels=(5, 20), val_fraction=0.2,
-                 test_fraction=0.5, recorded_test_fraction=0.0, force_calibration=None, augment=None, seed=0):
+                 test_fraction=0.5, recorded_test_fraction=0.0, force_calibration=None, augment=None, seed=0,
+                 declared_split="use"):
         self.source = source
         self.label = label
         self.modalities = modalities
@@ -70,7 +79,8 @@ class TimeSeriesDataModule:
         self.trim_end = trim_end
         self.min_variance = min_variance
         self.variance_channel = variance_channel
-        self.split = split
+        self.split = split   # as asked; setup() replaces auto with the split it used
+        self.declared_split = declared_split
         self.train_levels = train_levels
         self.val_levels = val_levels
         self.val_fraction = val_fraction
@@ -99,6 +109,10 @@ class TimeSeriesDataModule:
         if self.label not in recordings.labels:
             raise InputError(f"data.label '{self.label}' is not a label of these recordings; "
                              f"available: {', '.join(recordings.labels.columns)}")
+        missing = recordings.labels[self.label].isna().to_numpy()
+        if missing.any():
+            raise InputError(f"{self._where(recordings.description)}: label '{self.label}' of recording "
+                             f"{int(np.flatnonzero(missing)[0])} is missing (NaN)")
         if self.force_calibration:
             calibration = dict(self.force_calibration)
             channel = calibration.pop("channel")
@@ -109,6 +123,42 @@ class TimeSeriesDataModule:
             recordings.channel_names[k] = calibrated_channel_name(channel, calibration.pop("renamed", None))
             recordings.signals[:, k] = fsr_force_n(recordings.signals[:, k], **calibration)
         return recordings
+
+    @staticmethod
+    def _where(description: dict) -> str:
+        """How error messages name the recordings: their file, else their scene."""
+        return str(description.get("path", description.get("scene", "the recordings")))
+
+    def _check_classes_trained(self, y_train, sides) -> None:
+        """There are two classes or more, training has two, and every class that validation or
+        test hold has training windows."""
+        if len(self.classes) < 2:
+            raise InputError(f"{self._where(self.recordings_description)}: every recording has {self.label} = "
+                             f"'{self.classes[0]}'; classification needs at least two classes")
+        trained = set(np.unique(y_train).tolist())
+        if len(trained) < 2:
+            names = ", ".join(self.classes[c] for c in sorted(trained)) or "none"
+            raise InputError(f"{self._where(self.recordings_description)}: the training windows of data.split="
+                             f"{self.split} hold one class ({names}); classification needs at least two")
+        for side, y in sides.items():
+            unseen = sorted(set(np.unique(y).tolist()) - trained)
+            if unseen:
+                name = self.classes[unseen[0]]
+                raise InputError(f"{self._where(self.recordings_description)}: class '{name}' has "
+                                 f"{int((y == unseen[0]).sum())} "
+                                 f"{side} window(s) but none in training (data.split={self.split}); a model cannot "
+                                 "learn a class it never sees (add training recordings of it, or leave it out)")
+
+    def _check_finite(self, X, names) -> None:
+        """(windows, channels, steps) in float32, the channel statistics or the standardised
+        windows the networks take, are finite: a channel of readings near 1e20 has a variance
+        beyond float32 (3.4e38), which would turn it into zeros or NaN."""
+        bad = ~np.isfinite(X)
+        if bad.any():
+            _, channel, _ = np.unravel_index(int(np.flatnonzero(bad)[0]), X.shape)
+            raise InputError(f"{self._where(self.recordings_description)}: channel '{names[channel]}' overflows "
+                             "float32 when standardised (its readings are too large: their variance exceeds 3.4e38); "
+                             "rescale it")
 
     def _channel_index(self, channel, names) -> int:
         if isinstance(channel, int) or str(channel).isdigit():
@@ -203,7 +253,7 @@ class TimeSeriesDataModule:
             return np.sort(rest[train]), np.sort(rest[val]), np.sort(test)
         if self.split == "predefined":
             # Each recording is its own group, so validation is carved by recording, stratified by label.
-            where = self.recordings_description.get("path", self.recordings_description.get("scene", "the recordings"))
+            where = self._where(self.recordings_description)
             declared = labels["split"].to_numpy() if "split" in labels else None
             self.test_stratified_by = None  # declared by the data, not drawn here
             return predefined_split(declared, self.val_fraction, self.seed, str(where),
@@ -211,6 +261,8 @@ class TimeSeriesDataModule:
         raise InputError(f"data.split must be one of {', '.join(SPLITS)}, got '{self.split}'")
 
     def setup(self) -> "TimeSeriesDataModule":
+        if self.split not in SPLITS:
+            raise InputError(f"data.split must be one of {', '.join(SPLITS)}, got '{self.split}'")
         recordings = self._load()
         self.recordings_description = dict(recordings.description)
         names = list(recordings.channel_names)
@@ -222,8 +274,12 @@ class TimeSeriesDataModule:
         labels = recordings.labels
         self.classes = sorted(labels[self.label].astype(str).unique())
         codes = labels[self.label].astype(str).map({c: i for i, c in enumerate(self.classes)}).to_numpy()
+        self.split, self.split_source = resolve_split(self.split, "split" in labels, self.declared_split, DRAWN_SPLIT,
+                                                      self._where(recordings.description))
         train_rec, val_rec, test_rec = self._split_recordings(labels)
         self.train_recordings, self.val_recordings, self.test_recordings = train_rec, val_rec, test_rec
+        log.info("data split: %s; %d train, %d validation, %d test recordings", self.split_source, len(train_rec),
+                 len(val_rec), len(test_rec))
 
         def windows_of(rows):
             X, owner = cut_windows(signals[rows], self.window_length, self.window_step, self.trim_start,
@@ -234,6 +290,7 @@ class TimeSeriesDataModule:
         X_train, y_train, levels_train, self.train_window_recording = windows_of(train_rec)
         X_val, y_val, self.val_levels_per_window, self.val_window_recording = windows_of(val_rec)
         X_test, y_test, self.test_levels_per_window, self.test_window_recording = windows_of(test_rec)
+        self._check_classes_trained(y_train, {"validation": y_val, "test": y_test})
         self.augment_report = None
         # Virtual force levels are made from training windows only: validation and test stay unseen.
         if self.augment and self.augment.get("enabled", False):
@@ -253,11 +310,16 @@ class TimeSeriesDataModule:
             self.n_virtual_windows = 0
 
         # Standardise each channel with the real training windows' statistics.
-        self.channel_mean = X_real.mean(axis=(0, 2), keepdims=True)
-        self.channel_std = np.where(X_real.std(axis=(0, 2), keepdims=True) > 0, X_real.std(axis=(0, 2), keepdims=True), 1.0)
-        self.X_train = ((X_train - self.channel_mean) / self.channel_std).astype(np.float32)
-        self.X_val = ((X_val - self.channel_mean) / self.channel_std).astype(np.float32)
-        self.X_test = ((X_test - self.channel_mean) / self.channel_std).astype(np.float32)
+        with np.errstate(over="ignore", invalid="ignore"):  # overflow is reported by name below
+            self.channel_mean = X_real.mean(axis=(0, 2), keepdims=True)
+            std = X_real.std(axis=(0, 2), keepdims=True)
+            self.channel_std = np.where(std > 0, std, 1.0)
+            self.X_train = ((X_train - self.channel_mean) / self.channel_std).astype(np.float32)
+            self.X_val = ((X_val - self.channel_mean) / self.channel_std).astype(np.float32)
+            self.X_test = ((X_test - self.channel_mean) / self.channel_std).astype(np.float32)
+        self._check_finite(np.concatenate([self.channel_mean, std], axis=2), names)
+        for X in (self.X_train, self.X_val, self.X_test):
+            self._check_finite(X, names)
         self.y_train, self.y_val, self.y_test = y_train.astype(np.int64), y_val.astype(np.int64), y_test.astype(np.int64)
         self.channel_names = names
         groups = self.modalities or {name: [name] for name in names}
@@ -286,7 +348,7 @@ class TimeSeriesDataModule:
 
     def summary(self) -> dict:
         return {"task": self.task, "label": self.label, "classes": self.classes, "split": self.split,
-                "split_note": SPLIT_NOTES.get(self.split, ""),
+                "split_note": SPLIT_NOTES.get(self.split, ""), "split_source": self.split_source,
                 "train_levels": list(self.train_levels) if self.split == "force_level" else None,
                 "val_levels": list(self.val_levels) if self.split == "force_level" else None,
                 "n_train_windows": int(len(self.y_train)), "n_virtual_windows": int(self.n_virtual_windows),

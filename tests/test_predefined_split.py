@@ -186,7 +186,7 @@ def test_table_without_split_column_cannot_be_predefined(compose_config, tmp_pat
                           "data.split_column=null"])
     with pytest.raises(InputError, match="data.split=predefined needs a split per row"):
         instantiate(cfg.data).setup()
-    with pytest.raises(InputError, match="data.split must be one of random, grouped, predefined, got 'fixed'"):
+    with pytest.raises(InputError, match="data.split must be one of auto, random, grouped, predefined, got 'fixed'"):
         RegressionDataModule(Loaded(lambda: None), FEATURES_RAW, split="fixed").setup()
 
 

@@ -20,7 +20,7 @@ from models.deployable import TimeSeriesPipeline
 
 ROOT = Path(__file__).resolve().parents[1]
 NEUTRAL = {"force_calibration": None, "decimate": 1, "window_length": None, "window_step": None, "trim_start": 0,
-           "trim_end": 0, "modalities": None, "split": "stratified"}
+           "trim_end": 0, "modalities": None, "split": "auto", "declared_split": "use"}
 # The seed paper's preprocessing as the fingertip experiments used it before the data options
 # became neutral: these must not move (configs/data/fingertip.yaml).
 FINGERTIP = {"decimate": 10, "window_length": 140, "window_step": 20, "trim_start": 3, "trim_end": 3,
