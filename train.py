@@ -22,14 +22,15 @@ os.environ["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), os.environ.g
 import hydra
 from hydra import compose, initialize_config_dir
 from hydra.core.hydra_config import HydraConfig
+from hydra.core.override_parser.overrides_parser import OverridesParser
 from hydra.errors import InstantiationException
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from data.atomic import atomic_write_text
 from data.config_checks import check_target_keys
 from data.errors import InputError
 from data.progress import phase
+from data.run_status import config_hash, mark_failed, mark_finished, mark_running, prepare_folder
 from data.split_settings import check_split_settings
 from data.threads import apply_threads, resolve_threads
 # torch, scikit-learn and onnx are imported in main(), after the config has been checked (a typo
@@ -43,11 +44,15 @@ OmegaConf.register_new_resolver("process_id", os.getpid, replace=True)
 @hydra.main(version_base="1.3", config_path="configs", config_name="config")
 def main(cfg: DictConfig) -> float:
     output_dir = Path(HydraConfig.get().runtime.output_dir)
+    # status.json says `running` first and `finished` (or `failed`) last; a run killed outright
+    # keeps `running`, which data/run_status.py reads as `interrupted` once its process is gone.
+    running = mark_running(output_dir, config_hash(cfg))
     # Stage every artefact in a hidden folder and move it into place only when the whole run
-    # (training, report, export, cost) succeeded: a failed run leaves its log, its .hydra/ and
-    # error.txt, never a metrics.json or a model that looks finished.
+    # (training, report, export, cost) succeeded: a failed run leaves its log, its .hydra/,
+    # error.txt and status.json, never a metrics.json or a model that looks finished.
     stage = output_dir / STAGE
     shutil.rmtree(stage, ignore_errors=True)
+    moved = []
     try:
         launcher = HydraConfig.get().launcher  # joblib runs n_jobs runs side by side: `all` is their share
         parallel_jobs = launcher.get("n_jobs", 1) if "joblib" in str(launcher.get("_target_", "")) else 1
@@ -63,19 +68,26 @@ def main(cfg: DictConfig) -> float:
         except InstantiationException as error:
             raise as_input_error(error) from None
         if cfg.export.enabled:
-            with phase("ONNX export"):
-                export_run(stage, cfg.export.opset, cfg.export.file)
+            with phase("ONNX export"):  # the hash taken before the run; the stage holds no .hydra/
+                export_run(stage, cfg.export.opset, cfg.export.file, running["config_hash"])
         if cfg.cost.measure_latency:
             with phase("latency measurement"):
                 metrics = record_costs(stage, cfg.export.file, cfg.cost.budget_s)
         for item in sorted(stage.iterdir()):
             os.replace(item, output_dir / item.name)
+            moved.append(output_dir / item.name)
         stage.rmdir()
+        mark_finished(output_dir, running)
         log.info("outputs in %s", output_dir)
     except BaseException as error:
         shutil.rmtree(stage, ignore_errors=True)
+        for path in moved:  # interrupted while moving in (Ctrl-C): take back what was moved
+            if path.is_dir():
+                shutil.rmtree(path)
+            else:
+                path.unlink()
         message = str(error).splitlines()[0] if str(error) else type(error).__name__
-        atomic_write_text(output_dir / "error.txt", f"{message}\n")
+        mark_failed(output_dir, running, message)
         log.error("run failed: %s", message)
         if not isinstance(error, InputError):
             raise
@@ -135,6 +147,32 @@ def check_overrides(argv: list[str]) -> None:
         sys.exit(2)
 
 
+def check_run_folder(argv: list[str]) -> None:
+    """The folder this command will write into (hydra.run.dir, or hydra.sweep.dir for a sweep)
+    must hold nothing from an earlier run, or one folder would mix two runs' files: checked here,
+    before Hydra writes .hydra/ and train.log into it, and refused in one line with exit code 2,
+    or cleared with overwrite=true (data/run_status.py). The default folders, named by time and
+    process id, are new. Hydra's other flags (--help, --cfg, ...) write no folder."""
+    flags = {arg for arg in argv if arg.startswith("-")}
+    if flags - {"-m", "--multirun"}:
+        return
+    try:
+        overrides = OverridesParser.create().parse_overrides([arg for arg in argv if not arg.startswith("-")])
+        with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+            cfg = compose(config_name="config", return_hydra_config=True,  # a sweep's folder does not depend on its axes
+                          overrides=[o.input_line for o in overrides if not o.is_sweep_override()])
+        setting = "hydra.sweep.dir" if flags or cfg.hydra.mode == RunMode.MULTIRUN else "hydra.run.dir"
+        folder = Path(OmegaConf.select(cfg, setting))
+    except Exception:  # a malformed sweep or config: Hydra reports it before it makes a folder
+        return
+    try:
+        prepare_folder(folder, setting, bool(cfg.overwrite))
+    except InputError as error:
+        print(f"error: {error}", file=sys.stderr)
+        sys.exit(2)
+
+
 if __name__ == "__main__":
     check_overrides(sys.argv[1:])
+    check_run_folder(sys.argv[1:])
     main()

@@ -17,6 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from data.scenes.capacitive6x6 import correlation_factor_rmc_per_n, pressed_cell_rmc  # noqa: E402
+from data.run_status import run_status  # noqa: E402
 
 
 def run_row(run_dir: Path) -> dict:
@@ -42,7 +43,8 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("sweep_dir")
     args = parser.parse_args(argv)
-    runs = sorted((p.parent for p in Path(args.sweep_dir).glob("*/metrics.json")), key=lambda p: int(p.name))
+    runs = sorted((p for p in Path(args.sweep_dir).iterdir() if p.is_dir() and run_status(p).state == "finished"),
+                  key=lambda p: int(p.name))
     frame = pd.DataFrame([run_row(r) for r in runs])
     order = list(dict.fromkeys(frame["model"]))
     summary = frame.groupby("model").agg(["mean", "std", "count"]).reindex(order)

@@ -26,6 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 from data.physics.bonded_layer import base_traction_pa, layer_kernels  # noqa: E402
 from data.physics.elastic_half_space import point_load_strain  # noqa: E402
+from data.run_status import run_status  # noqa: E402
 
 VARIANTS = ("taxels_minimal", "taxels_flat", "taxels", "taxels_bump", "taxels_ridge", "taxels_hair")
 
@@ -73,7 +74,7 @@ def summarise(sweep_dir: Path) -> str:
     import pandas as pd
     import yaml
     rows = []
-    for job in sorted(p for p in sweep_dir.iterdir() if (p / "metrics.json").is_file()):
+    for job in sorted(p for p in sweep_dir.iterdir() if p.is_dir() and run_status(p).state == "finished"):
         overrides = dict(o.split("=", 1) for o in yaml.safe_load((job / ".hydra" / "overrides.yaml").read_text()))
         metrics = json.loads((job / "metrics.json").read_text())
         for target, row in metrics["test"].items():

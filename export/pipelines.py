@@ -8,7 +8,6 @@ the graph from the fold models' spread, the candidates' disagreement and sigma_d
 Time series: `window` [batch, channels, steps] float32 raw window -> `probabilities`.
 Metadata describe the inputs and outputs so the predict side can check a file against them.
 """
-import hashlib
 import json
 import tomllib
 from pathlib import Path
@@ -134,8 +133,8 @@ def metadata_for(pipeline, config_hash: str, opset: int) -> dict[str, str]:
             "outputs": json.dumps(["probabilities"])}
 
 
-def export_pipeline(pipeline, opset: int = 18, config_text: str = "") -> onnx.ModelProto:
-    config_hash = hashlib.sha256(config_text.encode()).hexdigest()[:16]
+def export_pipeline(pipeline, opset: int, config_hash: str) -> onnx.ModelProto:
+    """`config_hash`: export/run_export.py's config_hash of the run's configuration, recorded in the metadata."""
     metadata = metadata_for(pipeline, config_hash, opset)
     if isinstance(pipeline, RegressionPipeline):
         return regression_graph(pipeline, opset, metadata)

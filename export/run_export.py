@@ -1,8 +1,9 @@
 """Export a finished run to ONNX: `python -m export.run_export <run_dir> [--opset 18]`.
 
-Reads the run's pipeline.pkl (and its .hydra/config.yaml for the config hash) and writes one
-self-contained <run_dir>/model.onnx, atomically. train.py calls it at the end of every run
-when `export.enabled` is true (the default).
+Reads the run's pipeline.npz (models/fitted_state.py: a format that cannot run code) and its
+.hydra/config.yaml for the config hash, and writes one self-contained <run_dir>/model.onnx,
+atomically. train.py calls it at the end of every run when `export.enabled` is true (the
+default), passing the hash of its configuration.
 """
 import argparse
 import logging
@@ -10,22 +11,34 @@ import sys
 import time
 from pathlib import Path
 
+from omegaconf import OmegaConf
+
 from data.atomic import atomic_write
 from data.errors import InputError
+from data.run_status import config_hash
 from export.pipelines import export_pipeline
-from models.deployable import load_pipeline
+from models.deployable import PIPELINE_FILE, load_pipeline
 
 log = logging.getLogger(__name__)
 
 
-def export_run(run_dir, opset: int = 18, file_name: str = "model.onnx") -> Path:
+def export_run(run_dir, opset: int = 18, file_name: str = "model.onnx", configuration_hash: str | None = None) -> Path:
+    """`configuration_hash`: config_hash of the run's configuration (train.py passes it); by
+    default computed from run_dir/.hydra/config.yaml, `unknown` in a folder without one."""
     run_dir = Path(run_dir)
-    pipeline_path = run_dir / "pipeline.pkl"
+    pipeline_path = run_dir / PIPELINE_FILE
     if not pipeline_path.is_file():
-        raise InputError(f"{run_dir}: no pipeline.pkl; is this a Touchstone run folder?")
-    config = run_dir / ".hydra" / "config.yaml"
+        raise InputError(f"{run_dir}: no {PIPELINE_FILE}; is this a Touchstone run folder?")
     start = time.perf_counter()
-    model = export_pipeline(load_pipeline(pipeline_path), opset, config.read_text() if config.is_file() else "")
+    pipeline = load_pipeline(pipeline_path)  # first: a file that is not a pipeline is the one line said
+    if configuration_hash is None:
+        config = run_dir / ".hydra" / "config.yaml"
+        if config.is_file():
+            configuration_hash = config_hash(OmegaConf.load(config))
+        else:
+            log.warning("%s: no .hydra/config.yaml, so the model's config_hash is 'unknown'", run_dir)
+            configuration_hash = "unknown"
+    model = export_pipeline(pipeline, opset, configuration_hash)
     path = atomic_write(run_dir / file_name, lambda tmp: tmp.write_bytes(model.SerializeToString()))
     log.info("exported %s (%.1f MB) in %.1f s", path, path.stat().st_size / 1e6, time.perf_counter() - start)
     return path

@@ -9,8 +9,10 @@ import numpy as np
 import onnx
 import pandas as pd
 import pytest
+from omegaconf import OmegaConf
 
 from conftest import tiny
+from data.run_status import config_hash
 from data.scenes.fingertip import FingertipScene
 from export.run_export import export_run
 from export.onnx_predictor import OnnxPredictor
@@ -36,8 +38,10 @@ def exported(tmp_path_factory):
                          "trainer.max_epochs=1", "trainer.progress=false", "trainer.device=cpu"]
         with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
             cfg = compose(config_name="config", overrides=overrides)
+        (out / ".hydra").mkdir()
+        OmegaConf.save(cfg, out / ".hydra" / "config.yaml")  # as Hydra does: the config hash comes from it
         run(cfg, out)
-        runs[family] = (export_run(out), load_pipeline(out / "pipeline.pkl"))
+        runs[family] = (export_run(out), load_pipeline(out / "pipeline.npz"))
     return runs
 
 
@@ -95,7 +99,7 @@ def test_exported_file_is_self_contained_and_carries_its_metadata(exported, tmp_
     again = tmp_path / "run"
     shutil.copytree(path.parent, again, ignore=shutil.ignore_patterns(path.name))
     before = sorted(str(p.relative_to(again)) for p in again.rglob("*"))
-    assert "pipeline.pkl" in before and path.name not in before
+    assert "pipeline.npz" in before and path.name not in before
     assert export_run(again) == again / path.name
     assert sorted(str(p.relative_to(again)) for p in again.rglob("*")) == sorted(before + [path.name])
     predictor = OnnxPredictor(alone)
@@ -103,7 +107,11 @@ def test_exported_file_is_self_contained_and_carries_its_metadata(exported, tmp_
     meta = {p.key: p.value for p in onnx.load(alone).metadata_props}
     assert json.loads(meta["features"]) == pipeline.feature_names and len(json.loads(meta["features"])) == 74
     assert json.loads(meta["target_units"])["pressure_pa"] == "pa" and meta["opset"] == "18"
-    assert len(meta["config_hash"]) == 16 and meta["touchstone_version"]
+    # the hash of the run's configuration (read back from its .hydra/config.yaml), not of a folder
+    # that does not exist yet; another family's configuration has another
+    assert meta["config_hash"] == config_hash(OmegaConf.load(path.parent / ".hydra" / "config.yaml"))
+    assert meta["config_hash"] != config_hash(OmegaConf.load(exported["resmlp"][0].parent / ".hydra" / "config.yaml"))
+    assert meta["touchstone_version"]
     assert predictor.outputs == ["prediction", "interval_half_width"]
     classifier = OnnxPredictor(exported["prcnn"][0])
     assert classifier.classes == exported["prcnn"][1].classes and classifier.window_steps == 1400
@@ -166,4 +174,4 @@ def test_export_on_demand_from_a_run_folder(exported, tmp_path):
     assert result.returncode == 0, result.stderr
     assert (folder / "model.onnx").stat().st_size > 0
     result = subprocess.run([sys.executable, "-m", "export.run_export", str(tmp_path)], capture_output=True, text=True, cwd=ROOT)
-    assert result.returncode == 2 and "no pipeline.pkl" in result.stderr
+    assert result.returncode == 2 and "no pipeline.npz" in result.stderr

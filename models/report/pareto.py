@@ -11,7 +11,9 @@ only in `seed` are one configuration: the report shows mean ± standard deviatio
 seeds and computes the front on the means (sweep `seed=0,1,2` beside the other axes). Costs are
 the fit time and the batch-1 inference latency (onnxruntime when the job exported, else eager).
 A configuration is Pareto-optimal when no other is at least as accurate and at least as cheap,
-and strictly better in one. Jobs without metrics are listed as failed, never dropped.
+and strictly better in one. Only jobs whose status.json says finished (data/run_status.py) are
+results; the others (failed, interrupted, still running) are listed with their state and
+reason, never dropped.
 """
 import json
 import logging
@@ -24,6 +26,7 @@ import yaml
 from hydra.experimental.callback import Callback
 
 from data.atomic import atomic_write, atomic_write_text
+from data.run_status import run_status
 
 log = logging.getLogger(__name__)
 
@@ -32,14 +35,11 @@ MEASURES = ("val_score", "test_score", "fit_time_s", "latency_p50_us", "model_si
 
 def _job_row(folder: Path) -> dict:
     overrides = yaml.safe_load((folder / ".hydra" / "overrides.yaml").read_text()) or []
-    row = {"job": folder.name, "overrides": overrides, "status": "failed"}
-    metrics_path = folder / "metrics.json"
-    if not metrics_path.is_file():
-        error = folder / "error.txt"
-        row["error"] = error.read_text().strip() if error.is_file() else "no metrics.json (crashed or still running)"
-        return row
-    metrics = json.loads(metrics_path.read_text())
-    row["status"] = "ok"
+    status = run_status(folder)
+    if status.state != "finished":  # failed, interrupted, still running: its files, if any, are not a result
+        return {"job": folder.name, "overrides": overrides, "status": status.state, "error": status.reason}
+    row = {"job": folder.name, "overrides": overrides, "status": "ok"}
+    metrics = json.loads((folder / "metrics.json").read_text())
     regression = "r2" in metrics["val"].get("average", {})
     score = (lambda split: split["average"]["r2"]) if regression else (lambda split: split["accuracy"])
     row["score_metric"] = "R² (mean over targets)" if regression else "accuracy"
@@ -160,7 +160,8 @@ def markdown(summary: pd.DataFrame, jobs: pd.DataFrame, parallel_warning: bool) 
                      f"| {'★' if r['pareto_fit_time'] else ''} | {'★' if r['pareto_latency'] else ''} |")
     failed = jobs[jobs["status"] != "ok"]
     if len(failed):
-        lines += ["", "Failed jobs:", ""] + [f"- job {r['job']} ({r['overrides']}): {r['error']}" for _, r in failed.iterrows()]
+        lines += ["", "Failed jobs (and any interrupted or still running; not counted above):", ""]
+        lines += [f"- job {r['job']} ({r['overrides']}): {r['status']}: {r['error']}" for _, r in failed.iterrows()]
     return "\n".join(lines) + "\n"
 
 
@@ -202,7 +203,7 @@ def write_report(sweep_dir, parallel: bool = False) -> pd.DataFrame:
     if len(summary):
         fig = figure(summary)
         atomic_write(sweep_dir / "pareto.png", lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
-    log.info("Pareto report of %d jobs (%d failed) in %d configurations in %s", len(jobs),
+    log.info("Pareto report of %d jobs (%d not finished) in %d configurations in %s", len(jobs),
              int((jobs["status"] != "ok").sum()), len(summary), sweep_dir)
     return summary
 
