@@ -27,11 +27,10 @@ from hydra.errors import InstantiationException
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from data.config_checks import check_target_keys
+from data.config_checks import check_config
 from data.errors import InputError
 from data.progress import phase
 from data.run_status import config_hash, mark_failed, mark_finished, mark_running, prepare_folder
-from data.split_settings import check_split_settings
 from data.threads import apply_threads, resolve_threads
 # torch, scikit-learn and onnx are imported in main(), after the config has been checked (a typo
 # is reported in about a second) and the thread setting applied (pools start at the right size).
@@ -121,23 +120,17 @@ def as_input_error(error: InstantiationException) -> Exception:
 
 def check_overrides(argv: list[str]) -> None:
     """Compose the config once up front so that an unknown option or key (also one added with `+`
-    that its target does not take), a malformed override, a missing mandatory value, a bad thread
-    count or an impossible split is one line and exit code 2 like every other input error (Hydra
-    would print a multi-line message and exit 1), in about a second. Sweeps and Hydra's own flags
-    are left to Hydra."""
+    that its target does not take), a malformed override, a missing mandatory value, or a setting
+    of the wrong type or out of range (data/config_checks.py: threads, seed, trainer.*, splits,
+    our components' parameters) is one line and exit code 2 like every other input error (Hydra
+    would print a multi-line message and exit 1, torch a traceback), in about a second. Sweeps
+    and Hydra's own flags are left to Hydra; models/runs/run.py checks each job's config."""
     if any(arg.startswith("-") for arg in argv):
         return
     try:
         with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
             cfg = compose(config_name="config", overrides=argv)
-        missing = [key for key in OmegaConf.missing_keys(cfg)]
-        if missing:
-            raise InputError(f"{missing[0]} needs a value (add {missing[0]}=...)")
-        resolve_threads(cfg.threads)
-        check_target_keys(cfg)
-        if cfg.data.get("_target_", "").startswith("data.regression_datamodule."):
-            check_split_settings(cfg.data.n_folds, cfg.data.test_fraction, cfg.data.val_fraction,
-                                 cfg.data.calibration_fraction, cfg.data.split)
+        check_config(cfg)  # its warnings are logged by the run itself, once
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
         sys.exit(2)

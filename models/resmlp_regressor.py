@@ -2,11 +2,11 @@
 
 Training: Adam (lr 1e-3) on MSE + l1 * sum|W| + l2 * sum W^2 over the Linear weights (Keras-style
 kernel regularisers, as in the seed), learning rate halved when validation loss plateaus,
-early stopping on validation loss with the best weights restored. A plain PyTorch loop,
-deterministic under `seed`. Inputs and targets are standardised inside `fit` with the training
-rows' statistics (so GaussianNoise(0.02) means 2 % of a feature's spread whatever its scale: on
-inputs of scale 1e-6 it would otherwise drown the signal) and predictions come back in the
-units of y.
+early stopping on validation loss (`early_stopping_patience: null` trains every epoch) with the
+best weights restored. A plain PyTorch loop, deterministic under `seed`. Inputs and targets are
+standardised inside `fit` with the training rows' statistics (so GaussianNoise(0.02) means 2 % of
+a feature's spread whatever its scale: on inputs of scale 1e-6 it would otherwise drown the
+signal) and predictions come back in the units of y.
 """
 import copy
 import math
@@ -133,7 +133,7 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
                 best_state = copy.deepcopy(self.module_.state_dict())
             else:
                 waited += 1
-                if waited >= self.early_stopping_patience:
+                if self.early_stopping_patience is not None and waited >= self.early_stopping_patience:
                     break
         bar.close()
         self.module_.load_state_dict(best_state)

@@ -17,7 +17,7 @@ KINDS = ("random_forest", "extra_trees", "decision_tree")
 
 
 class TreeRegressor(RegressorMixin, BaseEstimator):
-    def __init__(self, kind="extra_trees", n_estimators=400, max_depth=14, max_features="sqrt",
+    def __init__(self, kind="extra_trees", n_estimators=400, max_depth=14, max_features: str | float | None = "sqrt",
                  min_samples_leaf=1, per_output=False, n_jobs=None, seed=0):
         self.kind = kind
         self.n_estimators = n_estimators

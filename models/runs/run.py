@@ -9,16 +9,21 @@ leave no model for export/ to convert.
 
 train.py calls `run(cfg, output_dir)`; tests call it too with a composed config and a tmp_path.
 """
+import logging
 import random
 from pathlib import Path
 
 import numpy as np
 import torch
+from hydra.core.hydra_config import HydraConfig
 from hydra.utils import call, instantiate
 from omegaconf import DictConfig
 
+from data.config_checks import check_config
 from models.runs.classification import run_classification
 from models.runs.regression import run_regression
+
+log = logging.getLogger(__name__)
 
 
 def seed_everything(seed: int) -> None:
@@ -28,6 +33,11 @@ def seed_everything(seed: int) -> None:
 
 
 def run(cfg: DictConfig, output_dir: str | Path) -> dict:
+    # train.py checked the command's config before start-up; a sweep's job gets its own config
+    # from Hydra, so each is checked here, and told which of its trainer overrides reach nothing.
+    overrides = HydraConfig.get().overrides.task if HydraConfig.initialized() else ()
+    for warning in check_config(cfg, overrides):
+        log.warning(warning)
     seed_everything(cfg.seed)
     if cfg.get("study") is not None:
         return call(cfg.study, cfg, output_dir)
