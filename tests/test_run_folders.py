@@ -1,7 +1,8 @@
 """Run folders that cannot lie: status.json says running, finished or failed (interrupted when its
 process is gone), a folder never mixes two runs, and the exported model carries its run's config
 hash. The kill tests stop real train.py runs with SIGKILL at seeded random moments and check that
-no folder reads as finished unless it is complete, and that every finished one loads and predicts."""
+no folder reads as finished unless it is complete, and that every complete one (finished, or killed
+after its last artefact moved in) loads and predicts what the uninterrupted run's model predicts."""
 import json
 import os
 import random
