@@ -8,7 +8,6 @@ finite as MODEL_DTYPE, the type the models compute in, so 1e308 (finite in float
 float32) is refused with the limit; and a column whose name carries a unit must lie in that
 unit's physical range (data/units.py: a resistance is never negative).
 """
-import logging
 from pathlib import Path
 
 import numpy as np
@@ -17,8 +16,6 @@ import pandas as pd
 from data.errors import InputError
 from data.progress import progress
 from data.units import first_outside
-
-log = logging.getLogger("touchstone")
 
 # The torch nets and the exported ONNX graph compute in float32, and scikit-learn's trees cast
 # their inputs to float32 too: a value must survive that cast.

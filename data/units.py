@@ -17,7 +17,7 @@ Only what holds for every sensor is a rule; anything signed or unknown is left a
   `delta`, or with the word `delta`, `change` or `diff` in it (the ERT scene's `dv_a01_b02_m03_v`);
 - lengths and forces are signed as coordinates and components (`x_mm`, `shear_x_n`, `normal_n`:
   a load cell also reads tension), and non-negative only where the name says the column is a
-  magnitude (LENGTH_MAGNITUDES, FORCE_MAGNITUDES).
+  magnitude (LENGTH_MAGNITUDES, FORCE_MAGNITUDES, FORCE_MAGNITUDE_STEMS).
 Ranges are in the column's own unit (hence per suffix, not per quantity: -273.15 is degrees
 Celsius). The scenes' column names (data/scenes/*.py) are checked against these rules by
 tests/test_training_input.py, so simulated data is never refused.
@@ -29,6 +29,25 @@ from dataclasses import dataclass
 import numpy as np
 
 INF = math.inf
+# Stems whose last word (digits after it allowed: force2_n) names a size or a magnitude; the
+# stem force_level too (FORCE_MAGNITUDE_STEMS). Lengths and forces are otherwise signed.
+LENGTH_MAGNITUDES = ("depth", "thickness", "radius", "diameter", "distance", "width", "indentation")
+FORCE_MAGNITUDES = ("force",)
+FORCE_MAGNITUDE_STEMS = ("force_level",)
+# A difference (`delta_r_ohm`, the ERT scene's `dv_a01_b02_m03_v`) is signed whatever its unit.
+DIFFERENCE_FIRST_WORDS = ("d", "dv", "dr", "delta")
+DIFFERENCE_WORDS = ("delta", "change", "diff")
+
+
+@dataclass(frozen=True)
+class Unit:
+    """What a unit word says: the quantity, and the interval its values physically lie in (in
+    this unit), for every column (`magnitudes` empty) or only for stems naming a magnitude."""
+    quantity: str
+    low: float = -INF
+    high: float = INF
+    why: str = "signed: no bound"
+    magnitudes: tuple = ()
 
 
 @dataclass(frozen=True)
@@ -44,40 +63,37 @@ class PhysicalRange:
         return f"a {self.quantity} lies in [{self.low:g}, {self.high:g}] ({self.why})"
 
 
-# Why each bound is physical, once per quantity.
-_RESISTANCE = ("resistance", "a passive material dissipates power, so V = IR with R >= 0; negative "
-                             "resistance is only ever the small-signal slope of an active circuit")
-_CAPACITANCE = ("capacitance", "C = Q / V >= 0 for any capacitor: its stored energy CV^2/2 cannot be "
-                               "negative; a change of capacitance is a delta_ column")
-_PRESSURE = ("pressure", "an absolute pressure or the pressure a contact exerts is >= 0; a gauge or "
-                         "differential reading is a delta_ column")
-_FREQUENCY = ("frequency", "events per second cannot be negative")
-_MASS = ("mass", "mass is never negative")
-_LENGTH = ("length", "a depth, thickness, radius, diameter, distance or width is a size, never "
-                     "negative; positions (x_mm) are signed coordinates")
-_FORCE = ("force magnitude", "a force's magnitude, a total force or a force level is >= 0; components "
-                             "(shear_x_n, normal_n) are signed")
+def _units(words, quantity, **rule) -> dict:
+    return {word: Unit(quantity, **rule) for word in words}
 
-# unit word -> (quantity, why, low, high), for quantities that are bounded whatever the name's stem.
-BOUNDED_UNITS = {
-    **{unit: (*_RESISTANCE, 0.0, INF) for unit in ("ohm", "ohms", "kohm", "mohm", "gohm")},
-    **{unit: (*_CAPACITANCE, 0.0, INF) for unit in ("pf", "nf", "uf", "ff")},
-    **{unit: (*_PRESSURE, 0.0, INF) for unit in ("pa", "kpa", "mpa", "hpa", "bar", "mbar", "psi")},
-    **{unit: (*_FREQUENCY, 0.0, INF) for unit in ("hz", "khz", "mhz")},
-    **{unit: (*_MASS, 0.0, INF) for unit in ("kg",)},
-    "degc": ("temperature", "nothing is colder than absolute zero, -273.15 degrees Celsius", -273.15, INF),
+
+# The one table: unit word -> quantity and physical range, each bound with why it is physical.
+UNITS = {
+    **_units(("ohm", "ohms", "kohm", "mohm", "gohm"), "resistance", low=0.0,
+             why="a passive material dissipates power, so V = IR with R >= 0; negative resistance is only "
+                 "ever the small-signal slope of an active circuit"),
+    **_units(("pf", "nf", "uf", "ff"), "capacitance", low=0.0,
+             why="C = Q / V >= 0 for any capacitor, its stored energy CV^2/2 cannot be negative; a change of "
+                 "capacitance is a delta_ column"),
+    **_units(("pa", "kpa", "mpa", "hpa", "bar", "mbar", "psi"), "pressure", low=0.0,
+             why="an absolute pressure or the pressure a contact exerts is >= 0; a gauge or differential "
+                 "reading is a delta_ column"),
+    **_units(("hz", "khz", "mhz"), "frequency", low=0.0, why="events per second cannot be negative"),
+    **_units(("kg",), "mass", low=0.0, why="mass is never negative"),
+    "degc": Unit("temperature", low=-273.15, why="nothing is colder than absolute zero, -273.15 degrees Celsius"),
+    **_units(("m", "cm", "mm", "um", "nm"), "length", low=0.0, magnitudes=LENGTH_MAGNITUDES,
+             why="a depth, thickness, radius, diameter, distance or width is a size, never negative; "
+                 "positions (x_mm) are signed coordinates"),
+    **_units(("n", "mn", "kn"), "force", low=0.0, magnitudes=FORCE_MAGNITUDES,
+             why="a force's magnitude, a total force or a force level is >= 0; components (shear_x_n, "
+                 "normal_n: a load cell also reads tension) are signed"),
+    # Signed: listed so that a reader sees they were considered, and for the quantity they name.
+    **_units(("v", "mv", "uv", "kv"), "voltage"),
+    **_units(("a", "ma", "ua", "na"), "current"),
+    **_units(("s", "ms", "us"), "time"),
+    **_units(("deg", "rad"), "angle"),
+    "counts": Unit("count"),
 }
-# Signed whatever the stem (listed so that a reader sees they were considered, not forgotten):
-# voltages (v, mv, uv), currents (a, ma, ua, na), time (s, ms, us), angles (deg, rad), counts.
-SIGNED_UNITS = ("v", "mv", "uv", "kv", "a", "ma", "ua", "na", "s", "ms", "us", "deg", "rad", "counts")
-# Units whose sign depends on what the stem names.
-LENGTH_UNITS = ("m", "cm", "mm", "um", "nm")
-FORCE_UNITS = ("n", "mn", "kn")
-# The stem's last word (digits after it allowed: force2_n) that makes a column a magnitude.
-LENGTH_MAGNITUDES = ("depth", "thickness", "radius", "diameter", "distance", "width", "indentation")
-FORCE_MAGNITUDES = ("force",)   # force_n, force2_n, grip_force_n; also the stem force_level
-DIFFERENCE_FIRST_WORDS = ("d", "dv", "dr", "delta")
-DIFFERENCE_WORDS = ("delta", "change", "diff")
 
 
 def unit_of(column: str) -> str | None:
@@ -86,32 +102,21 @@ def unit_of(column: str) -> str | None:
     return unit.lower() if stem else None
 
 
-def _is_difference(words: list[str]) -> bool:
-    return words[0] in DIFFERENCE_FIRST_WORDS or any(w in DIFFERENCE_WORDS for w in words)
-
-
-def _names_magnitude(words: list[str], magnitudes: tuple[str, ...]) -> bool:
-    if re.sub(r"\d+$", "", words[-1]) in magnitudes:
-        return True
-    return "force" in magnitudes and words[-2:] == ["force", "level"]
-
-
 def physical_range(column: str) -> PhysicalRange | None:
-    """The interval a column's values can physically lie in, from its name; None: no rule."""
-    unit = unit_of(column)
-    if unit is None:
+    """The interval a column's values can physically lie in, from its name; None: no rule (an
+    unknown or signed unit, a difference, a length or force that is not a magnitude)."""
+    unit = UNITS.get(unit_of(column))
+    if unit is None or (unit.low == -INF and unit.high == INF):
         return None
-    words = str(column).lower().rsplit("_", 1)[0].split("_")
-    if _is_difference(words):
+    stem = str(column).lower().rpartition("_")[0]
+    words = stem.split("_")
+    if words[0] in DIFFERENCE_FIRST_WORDS or any(w in DIFFERENCE_WORDS for w in words):
         return None
-    if unit in BOUNDED_UNITS:
-        quantity, why, low, high = BOUNDED_UNITS[unit]
-        return PhysicalRange(quantity, low, high, why)
-    if unit in LENGTH_UNITS and _names_magnitude(words, LENGTH_MAGNITUDES):
-        return PhysicalRange(_LENGTH[0], 0.0, INF, _LENGTH[1])
-    if unit in FORCE_UNITS and _names_magnitude(words, FORCE_MAGNITUDES):
-        return PhysicalRange(_FORCE[0], 0.0, INF, _FORCE[1])
-    return None
+    names_magnitude = (re.sub(r"\d+$", "", words[-1]) in unit.magnitudes
+                       or (unit.quantity == "force" and stem.endswith(FORCE_MAGNITUDE_STEMS)))
+    if unit.magnitudes and not names_magnitude:
+        return None
+    return PhysicalRange(unit.quantity, unit.low, unit.high, unit.why)
 
 
 def first_outside(values, column: str):

@@ -206,7 +206,7 @@ def set_cell(row, column, value):
      "column 'label': recording 'r2' has rows labelled fast and slow; all rows of one recording must carry one label"),
     (set_cell(3, "force_n", 5.0), "force_n",
      "column 'force_n': recording 'r0' has rows labelled 1.0 and 5.0; all rows of one recording must carry one force level"),
-    (set_cell(3, "force_n", -1.0), "force_n", "force level column 'force_n' has -1 in line 5; a force magnitude is >= 0"),
+    (set_cell(3, "force_n", -1.0), "force_n", "force level column 'force_n' has -1 in line 5; a force is >= 0"),
     (set_cell(3, "level", -1.0), "level", "force level column 'level' has -1 in line 5; a force level in newtons is >= 0"),
     (set_cell(3, "recording", np.nan), None, "recording column 'recording' is empty in line 5"),
     (set_cell(3, "ax", 1e39), None, "channel/time column 'ax' has 1e+39 in line 5, beyond the largest float32"),
@@ -287,8 +287,8 @@ def test_reading_a_table_says_so_at_once_and_counts_rows(tmp_path, caplog, monke
 # -- units: the scenes' columns are never refused -----------------------------------------------
 @pytest.mark.parametrize("column, quantity", [
     ("r_01_ohm", "resistance"), ("R_01_Ohm", "resistance"), ("c_pf", "capacitance"), ("pressure_pa", "pressure"),
-    ("pressure_kpa", "pressure"), ("depth_mm", "length"), ("thickness_um", "length"), ("force_n", "force magnitude"),
-    ("force2_n", "force magnitude"), ("force_level_n", "force magnitude"), ("grip_force_n", "force magnitude"),
+    ("pressure_kpa", "pressure"), ("depth_mm", "length"), ("thickness_um", "length"), ("force_n", "force"),
+    ("force2_n", "force"), ("force_level_n", "force"), ("grip_force_n", "force"),
     ("x_mm", None), ("shear_x_n", None), ("normal_n", None), ("force_x_n", None), ("dv_a01_b02_m03_v", None),
     ("delta_r_ohm", None), ("r_change_ohm", None), ("rmc_r0_c3", None), ("rmc_window_r-1_c+0", None),
     ("r_01_norm", None), ("triboelectric_na", None), ("piezoresistive_v", None), ("time_s", None), ("label", None),
