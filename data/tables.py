@@ -3,8 +3,9 @@
 A SensorTable holds one row per press: channel columns (inputs), target columns (what to
 learn, units in their names) and a group id per row (all repeats of one position-depth
 pair share a group, so grouped splits can keep them on one side). An optional `split` gives
-each row the side its source declares (train / val / test) for `data.split=predefined`: a user's
-file with a split column, or a scene that models a published protocol. When the channels were
+each row the side its source declares (train / val / test), the split the datamodule uses unless
+data.declared_split=ignore: a user's file with a split column, or a scene that models a published
+protocol. When the channels were
 normalised from raw readings (scene rubber12_lab's min-max step), `normalisation` keeps how,
 so a model trained on them can be deployed on the raw readings.
 
@@ -60,9 +61,9 @@ class SensorTable:
 
 
 class TableSource:
-    """A user's recording: `data=table data.source.path=rig.csv`, columns named in the config.
-    A `split_column` present in the file is kept as the rows' declared split (data.split=predefined
-    uses it); absent, the table declares none."""
+    """A user's recording: `data=table data.path=rig.csv`, columns named in the config.
+    A `split_column` present in the file is kept as the rows' declared split (the datamodule's
+    split unless data.declared_split=ignore); absent, the table declares none."""
 
     def __init__(self, path: str, channel_columns: list[str], target_columns: list[str],
                  group_columns: list[str] | None = None, split_column: str | None = "split"):
