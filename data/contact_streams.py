@@ -10,7 +10,9 @@ truth, one row per frame and contact; a user's recording has none (`truth` is No
 `load_frames` reads a user's recording: a CSV with one row per frame and rows x cols
 comma-separated cell values in row-major order, as the firmware streams them (seed 001
 eq. 2-3: x_11, x_12, ..., x_1m, x_21, ..., x_nm), or an NPY array [n_frames, rows, cols]
-(or [n_frames, rows * cols]). Every problem is one line naming the file and what is wrong.
+(or [n_frames, rows * cols]). Every problem is one line naming the file and what is wrong; a
+cell must be a finite number within float32's range (the force model reads contacts' windows in
+float32, where 1e308 is infinite, and the tracker's baseline spread of such counts overflows).
 """
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -19,8 +21,10 @@ import numpy as np
 import pandas as pd
 
 from data.errors import InputError
+from data.table_files import MODEL_DTYPE_MAX
 
 TRUTH_COLUMNS = ["frame", "contact_id", "x_mm", "y_mm", "force_n", "radius_mm", "session"]
+WITHIN = f"cells must be finite numbers within float32 (±{MODEL_DTYPE_MAX:.4g})"
 
 
 @dataclass
@@ -58,6 +62,8 @@ def _read_csv_frames(path: Path, n_cells: int) -> np.ndarray:
                             skip_blank_lines=True, comment="#")
     except pd.errors.EmptyDataError:
         raise InputError(f"{path}: file is empty") from None
+    except UnicodeDecodeError:  # a binary file given as CSV (a pickle, an image): refused, never decoded
+        raise InputError(f"{path}: not a text file (bytes that are not UTF-8); expected one frame per line") from None
     except pd.errors.ParserError as error:
         # the C parser reports a row with more fields than the first as "Expected k fields in line n"
         raise InputError(f"{path}: rows differ in their number of cells "
@@ -73,10 +79,10 @@ def _read_csv_frames(path: Path, n_cells: int) -> np.ndarray:
         raise InputError(f"{path}: frame {row} has {n_cells - int((~missing[row]).sum())} missing cell(s) "
                          f"(first at cell {col}); expected {n_cells} per frame")
     values = frame.apply(pd.to_numeric, errors="coerce").to_numpy(dtype=np.float64)
-    bad = ~np.isfinite(values)
+    bad = _unusable(values)
     if bad.any():
         row, col = map(int, np.argwhere(bad)[0])
-        raise InputError(f"{path}: frame {row}, cell {col} is not a finite number: {text[row, col]!r}")
+        raise InputError(f"{path}: frame {row}, cell {col} is not a finite number: {text[row, col]!r}; {WITHIN}")
     return values
 
 
@@ -98,11 +104,17 @@ def _read_npy_frames(path: Path, rows: int, cols: int) -> np.ndarray:
         raise InputError(f"{path}: array of shape {values.shape}, expected [frames, rows, cols] "
                          "or [frames, rows * cols]")
     values = values.reshape(len(values), rows * cols).astype(np.float64)
-    bad = ~np.isfinite(values)
+    bad = _unusable(values)
     if bad.any():
         row, col = map(int, np.argwhere(bad)[0])
-        raise InputError(f"{path}: frame {row}, cell {col} is not a finite number ({values[row, col]})")
+        raise InputError(f"{path}: frame {row}, cell {col} is not a finite number ({values[row, col]:g}); {WITHIN}")
     return values
+
+
+def _unusable(values: np.ndarray) -> np.ndarray:
+    """Cells that are NaN, infinite or beyond float32's range (MODEL_DTYPE_MAX)."""
+    with np.errstate(invalid="ignore"):
+        return ~(np.abs(values) <= MODEL_DTYPE_MAX)
 
 
 def check_grid(rows, cols, pitch_mm, frame_rate_hz, source="stream") -> None:
@@ -163,8 +175,10 @@ def frames_from_lines(lines, rows: int, cols: int, source: str = "stdin"):
         except ValueError:
             bad = next(c for c in cells if not _is_number(c))
             raise InputError(f"{source}: line {number}, a cell is not a number: {bad.strip()!r}") from None
-        if not np.isfinite(frame).all():
-            raise InputError(f"{source}: line {number}, cell {int(np.argmin(np.isfinite(frame)))} is not finite")
+        bad = _unusable(frame)
+        if bad.any():
+            raise InputError(f"{source}: line {number}, cell {int(np.argmax(bad))} is not a finite number "
+                             f"({frame[bad][0]:g}); {WITHIN}")
         yield frame.reshape(rows, cols)
 
 

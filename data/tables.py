@@ -88,7 +88,14 @@ class TableSource:
             missing = [c for c in self.group_columns if c not in frame.columns]
             if missing:
                 raise InputError(f"{self.path}: missing group column(s) {', '.join(missing)}")
-            groups = frame.groupby(self.group_columns, sort=True, dropna=False).ngroup().to_numpy()
+            # a group column that is a channel or target is grouped by its checked float64 values
+            # (pandas cannot group float16); another must hold hashable values (not lists)
+            keys = pd.DataFrame({c: numeric[c] if c in numeric else frame[c] for c in self.group_columns})
+            try:
+                groups = keys.groupby(self.group_columns, sort=True, dropna=False).ngroup().to_numpy()
+            except (TypeError, NotImplementedError) as error:
+                raise InputError(f"{self.path}: group column(s) {', '.join(self.group_columns)} cannot be grouped "
+                                 f"({str(error).splitlines()[0]})") from None
         else:
             groups = np.arange(len(frame))
         split = None

@@ -48,7 +48,9 @@ class OnnxPredictor:
             raise InputError(f"{path}: not a loadable ONNX model ({type(error).__name__})") from None
         try:
             self.metadata = self.session.get_modelmeta().custom_metadata_map
-            inputs, outputs = self.session.get_inputs(), self.session.get_outputs()
+            # names, types and shapes read here: onnxruntime decodes each when it is first read
+            inputs = [(i.name, i.type, i.shape) for i in self.session.get_inputs()]
+            outputs = [(o.name, o.shape) for o in self.session.get_outputs()]
         except UnicodeDecodeError:  # a damaged file: onnxruntime hands its strings over as UTF-8
             raise InputError(f"{path}: metadata or tensor names are not UTF-8 text; re-export the run") from None
         if "kind" not in self.metadata:
@@ -98,26 +100,28 @@ class OnnxPredictor:
 
     def _check_graph(self, inputs, outputs) -> None:
         """The graph takes and returns what its metadata says, so a mismatch is found here, not as
-        an onnxruntime error halfway through a prediction."""
+        an onnxruntime error halfway through a prediction. inputs: (name, type, shape) each;
+        outputs: (name, shape) each."""
         name = INPUT_NAME[self.kind]
-        if [i.name for i in inputs] != [name]:
-            raise InputError(f"{self.path}: the graph takes {[i.name for i in inputs]}, expected one input '{name}' "
+        if [i[0] for i in inputs] != [name]:
+            raise InputError(f"{self.path}: the graph takes {[i[0] for i in inputs]}, expected one input '{name}' "
                              f"for a {self.kind} model")
-        if inputs[0].type not in INPUT_DTYPES:
-            raise InputError(f"{self.path}: the graph's input '{name}' is {inputs[0].type}, expected a float tensor")
-        self.input_dtype = np.dtype(INPUT_DTYPES[inputs[0].type])
-        if not _fits(inputs[0].shape, self.input_shape):
-            raise InputError(f"{self.path}: the graph's input '{name}' has shape {inputs[0].shape}, but metadata "
+        _, kind, shape = inputs[0]
+        if kind not in INPUT_DTYPES:
+            raise InputError(f"{self.path}: the graph's input '{name}' is {kind}, expected a float tensor")
+        self.input_dtype = np.dtype(INPUT_DTYPES[kind])
+        if not _fits(shape, self.input_shape):
+            raise InputError(f"{self.path}: the graph's input '{name}' has shape {shape}, but metadata "
                              f"'channels'{' and window_steps' if self.kind == 'classification' else ''} say "
                              f"(batch, {', '.join(map(str, self.input_shape))})")
-        if [o.name for o in outputs] != self.outputs or self.outputs[0] != MAIN_OUTPUT[self.kind]:
+        if [o[0] for o in outputs] != self.outputs or self.outputs[0] != MAIN_OUTPUT[self.kind]:
             raise InputError(f"{self.path}: metadata 'outputs' says {self.outputs} but the graph returns "
-                             f"{[o.name for o in outputs]}; a {self.kind} model's first output is "
+                             f"{[o[0] for o in outputs]}; a {self.kind} model's first output is "
                              f"'{MAIN_OUTPUT[self.kind]}'")
         named = "targets" if self.kind == "regression" else "classes"
-        for output in outputs:
-            if not _fits(output.shape, (self.output_width,)):
-                raise InputError(f"{self.path}: the graph's output '{output.name}' has shape {output.shape}, "
+        for output, shape in outputs:
+            if not _fits(shape, (self.output_width,)):
+                raise InputError(f"{self.path}: the graph's output '{output}' has shape {shape}, "
                                  f"but metadata '{named}' names {self.output_width}")
 
     # -- running the graph ------------------------------------------------------------------

@@ -22,7 +22,8 @@ import numpy as np
 import onnx
 from onnx import TensorProto, helper
 
-predict_main = runpy.run_path(str(Path(__file__).resolve().parents[1] / "predict.py"), run_name="predict_script")["main"]
+ROOT = Path(__file__).resolve().parents[1]
+predict_main = runpy.run_path(str(ROOT / "predict.py"), run_name="predict_script")["main"]
 
 CHANNELS = ["a_ohm", "b_ohm"]
 TARGETS = ["x_mm"]
