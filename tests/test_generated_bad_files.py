@@ -245,7 +245,7 @@ def parquet_column(kind: str, values: np.ndarray, extremes: list) -> pa.Array:
     if kind == "uint64":
         return pa.array(np.full(len(values), 2 ** 64 - 1, dtype=np.uint64))
     if kind == "bool":
-        return pa.array(values > values.mean())
+        return pa.array(values > 0)
     if kind == "numeric_text":
         return pa.array([repr(v) for v in values])
     if kind == "junk_text":
