@@ -27,9 +27,11 @@ is fitted by the shared pipeline (datamodule, grouped split, report metrics) on 
 characterisation presses read as the tracker reads a contact, the 3 x 3 cells around the
 peak (`characterisation_channels: window`, data/contact_windows.py), and every tracker reads
 each contact's window through that same fitted pipeline. Or `force_model: <run folder or
-pipeline.pkl>` of such a run (`python train.py experiment=capacitive_force hydra.mode=RUN
-scene.characterisation_channels=window`), or `none`.
+model.onnx>` of such a run (`python train.py experiment=capacitive_force hydra.mode=RUN
+scene.characterisation_channels=window`): its exported model, run with onnxruntime (an ONNX
+graph is operators and numbers; nothing in it runs as Python), or `none`.
 """
+import json
 import sys
 from pathlib import Path
 
@@ -42,10 +44,10 @@ from data.atomic import atomic_write_json, atomic_write_text
 from data.contact_streams import ContactStream, check_grid, frames_from_lines, load_frames
 from data.contact_windows import window_channel_names
 from data.errors import InputError
+from data.threads import configured_threads
 from models.contact_tracking import ContactTracker
 from models.contact_tracking.force import force_reader
 from models.contact_tracking.timing import latency_summary, timed_updates
-from models.deployable import load_pipeline
 from models.report.contact_animation import write_contact_animation
 from models.report.tensorboard_logger import TensorBoardLogger
 from models.report.tracking_metrics import evaluate_tracking
@@ -84,35 +86,55 @@ def fit_force_pipeline(cfg: DictConfig, repetitions: int):
     return result.pipeline, summary
 
 
-def load_force_pipeline(path: str):
-    """A saved run's pipeline (its folder or pipeline.pkl) that reads the 3 x 3 window."""
+def load_force_model(path: str):
+    """A saved run's exported model (its folder or model.onnx) that reads the 3 x 3 window to
+    force_n -> (windows (n, 9) -> force_n, summary). onnxruntime is called here rather than
+    export/onnx_predictor.py because models/ never imports export/."""
+    import onnxruntime as ort
     path = Path(path)
-    path = path / "pipeline.pkl" if path.is_dir() else path
+    path = path / "model.onnx" if path.is_dir() else path
     if not path.is_file():
-        raise InputError(f"capacitive_tracking: force_model {path} does not exist (a run folder or its pipeline.pkl)")
-    pipeline = load_pipeline(path)
-    if list(getattr(pipeline, "channel_names", [])) != window_channel_names() or "force_n" not in pipeline.target_names:
+        raise InputError(f"capacitive_tracking: force_model {path} does not exist (a run folder or its model.onnx)")
+    options = ort.SessionOptions()
+    options.intra_op_num_threads, options.inter_op_num_threads = configured_threads() or 1, 1
+    try:
+        session = ort.InferenceSession(str(path), options, providers=["CPUExecutionProvider"])
+    except Exception as error:  # onnxruntime's own error types: not a model it can load
+        raise InputError(f"capacitive_tracking: force_model {path} is not a loadable ONNX model "
+                         f"({type(error).__name__})") from None
+    meta = session.get_modelmeta().custom_metadata_map
+    try:
+        channels, targets = json.loads(meta["channels"]), json.loads(meta["targets"])
+    except (KeyError, ValueError):
+        channels, targets = None, None
+    inputs, outputs = [i.name for i in session.get_inputs()], [o.name for o in session.get_outputs()]
+    if (meta.get("kind") != "regression" or channels != window_channel_names() or not isinstance(targets, list)
+            or "force_n" not in targets or inputs != ["channels"] or outputs[:1] != ["prediction"]):
         raise InputError(f"capacitive_tracking: force_model {path} does not read the 3x3 window to force_n; train "
                          "it with experiment=capacitive_force hydra.mode=RUN scene.characterisation_channels=window")
-    return pipeline, {"model": type(pipeline.model).__name__, "reads": "3x3 window of loads around a contact's peak",
-                      "loaded_from": str(path)}
+    column = targets.index("force_n")
+
+    def read(windows):
+        return session.run(["prediction"], {"channels": np.asarray(windows, dtype=np.float64)})[0][:, column]
+    return read, {"model": meta.get("model", "unknown"), "reads": "3x3 window of loads around a contact's peak",
+                  "loaded_from": str(path)}
 
 
-def make_tracker(rows: int, cols: int, pitch_mm: float, params: dict, force_pipeline) -> ContactTracker:
-    """A tracker with the study's parameters, reading force through the pipeline when given one."""
-    if force_pipeline is not None:
-        params = {**params, "force_model": force_reader(force_pipeline), "force_feature": "window"}
+def make_tracker(rows: int, cols: int, pitch_mm: float, params: dict, force) -> ContactTracker:
+    """A tracker with the study's parameters, reading force with `force` (windows -> force_n) when given."""
+    if force is not None:
+        params = {**params, "force_model": force, "force_feature": "window"}
     return ContactTracker(rows=rows, cols=cols, pitch_mm=pitch_mm, **params)
 
 
-def track_live(lines, recording: dict, params: dict, force_pipeline, out) -> ContactStream:
+def track_live(lines, recording: dict, params: dict, force, out) -> ContactStream:
     """Standard input line by line (a serial stream piped in): the first n_rest_frames frames fit
     the tracker, then every frame's contacts are written to `out` as CSV lines (frame, id, x_mm,
     y_mm, force_n) as it arrives. Returns every frame read, for the files written at the end."""
     rows, cols, n_rest = int(recording["rows"]), int(recording["cols"]), int(recording["n_rest_frames"])
     pitch_mm, rate_hz = float(recording["pitch_mm"]), float(recording["frame_rate_hz"])
     check_grid(rows, cols, pitch_mm, rate_hz, "stdin")
-    tracker, frames = make_tracker(rows, cols, pitch_mm, params, force_pipeline), []
+    tracker, frames = make_tracker(rows, cols, pitch_mm, params, force), []
     print("frame,id,x_mm,y_mm,force_n", file=out, flush=True)
     for frame in frames_from_lines(lines, rows, cols):
         frames.append(frame)
@@ -128,10 +150,10 @@ def track_live(lines, recording: dict, params: dict, force_pipeline, out) -> Con
     return ContactStream(np.stack(frames), rate_hz, pitch_mm, n_rest, None, {"source": "stdin"})
 
 
-def track(stream: ContactStream, params: dict, force_pipeline, keep_images: bool):
-    """Fit on the rest frames, update frame by frame (force from the pipeline, given one);
+def track(stream: ContactStream, params: dict, force, keep_images: bool):
+    """Fit on the rest frames, update frame by frame (force from `force`, given one);
     returns (contacts with stream frame numbers, timing, images)."""
-    tracker = make_tracker(stream.rows, stream.cols, stream.pitch_mm, params, force_pipeline)
+    tracker = make_tracker(stream.rows, stream.cols, stream.pitch_mm, params, force)
     tracker.fit(stream.frames[:stream.n_rest_frames])
     live = stream.frames[stream.n_rest_frames:]
     found, elapsed_us = timed_updates(tracker, live)
@@ -164,14 +186,15 @@ def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_for
         raise InputError("capacitive_tracking: study.trackers lists no tracker")
     live = bool(recording) and recording.get("path") == "-"   # standard input, line by line
     stream, scene = (None, None) if live else load_stream(cfg, recording)
-    force_pipeline, force_info = None, None
+    force, force_info = None, None   # force: contacts' windows (n, 9) -> force_n
     if force_model == "pipeline" and scene is not None:
-        force_pipeline, force_info = fit_force_pipeline(cfg, force_repetitions)
+        pipeline, force_info = fit_force_pipeline(cfg, force_repetitions)
+        force = force_reader(pipeline)
     elif force_model not in (None, "none", "pipeline"):
-        force_pipeline, force_info = load_force_pipeline(force_model)
+        force, force_info = load_force_model(force_model)
     primary = next(iter(trackers))
     if live:
-        stream = track_live(sys.stdin, recording, dict(trackers[primary] or {}), force_pipeline, sys.stdout)
+        stream = track_live(sys.stdin, recording, dict(trackers[primary] or {}), force, sys.stdout)
     radius = float(match_radius_mm) if match_radius_mm is not None else stream.pitch_mm
     metrics = {"stream": {"source": stream.description.get("source", "scene"), "frames": stream.n_frames,
                           "rest_frames": stream.n_rest_frames, "grid": [stream.rows, stream.cols],
@@ -183,7 +206,7 @@ def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_for
                "trackers": {}}
     tables, images = {}, None
     for name, params in trackers.items():
-        table, timing, frames = track(stream, dict(params or {}), force_pipeline, keep_images=name == primary)
+        table, timing, frames = track(stream, dict(params or {}), force, keep_images=name == primary)
         images = frames if name == primary else images
         tables[name] = table
         entry = {"params": params, "timing": timing,
@@ -191,7 +214,7 @@ def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_for
         if stream.truth is not None:
             entry.update(evaluate_tracking(stream.truth, table, stream.n_frames, radius, min_force_n,
                                            group_column="session"))
-            if force_pipeline is not None:
+            if force is not None:
                 entry["overall"].update(_force_error(stream.truth, table, radius))
         metrics["trackers"][name] = entry
 
