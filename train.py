@@ -8,6 +8,7 @@ import logging
 import os
 import re
 import shutil
+import signal
 import sys
 from pathlib import Path
 
@@ -45,6 +46,9 @@ def main(cfg: DictConfig) -> float:
     output_dir = Path(HydraConfig.get().runtime.output_dir)
     # status.json says `running` first and `finished` (or `failed`) last; a run killed outright
     # keeps `running`, which data/run_status.py reads as `interrupted` once its process is gone.
+    # A scheduler's time limit (SLURM) or a plain `kill` sends SIGTERM first: end as a failed run
+    # with that reason rather than vanish mid-write (SIGKILL still reads as interrupted).
+    signal.signal(signal.SIGTERM, terminated)
     running = mark_running(output_dir, config_hash(cfg))
     # Stage every artefact in a hidden folder and move it into place only when the whole run
     # (training, report, export, cost) succeeded: a failed run leaves its log, its .hydra/,
@@ -98,6 +102,10 @@ def main(cfg: DictConfig) -> float:
     if "average" in val:
         return val["average"]["r2"]
     return val.get("accuracy", float("nan"))
+
+
+def terminated(signum, frame):
+    raise SystemExit("terminated by SIGTERM (a scheduler's time limit or a kill)")
 
 
 def as_input_error(error: InstantiationException) -> Exception:

@@ -314,3 +314,19 @@ def test_twenty_kills_at_random_moments_never_read_finished_unless_complete(whol
     killed = kill_at_random_moments(whole_run, tmp_path, n_random=16, n_at_export=4, seed=1)
     states = {row["state"] for row in killed}
     assert "interrupted" in states, killed  # the kills did land inside runs
+
+
+def test_a_run_sent_sigterm_reads_failed_with_the_reason(tmp_path):
+    """SIGTERM (a scheduler's time limit) ends the run as failed, with that reason, not interrupted."""
+    folder = tmp_path / "run"
+    process = subprocess.Popen(train_command(*FAST, f"hydra.run.dir={folder}"), cwd=tmp_path,
+                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=dict(os.environ, CI="true"))
+    deadline = time.monotonic() + 120
+    while run_status(folder).state != "running" and process.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert run_status(folder).state == "running"
+    process.send_signal(signal.SIGTERM)
+    assert process.wait(timeout=120) != 0
+    status = run_status(folder)
+    assert (status.state, status.reason) == ("failed", "terminated by SIGTERM (a scheduler's time limit or a kill)")
+    assert not (folder / "metrics.json").exists() and not (folder / "model.onnx").exists()

@@ -1,4 +1,5 @@
 """Hard cases in training and simulation: finite results or a clear one-line error."""
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -65,7 +66,9 @@ def test_nan_loss_stops_at_once_with_the_epoch_and_writes_no_model(tmp_path):
                              "model=resmlp", f"hydra.run.dir={tmp_path / 'run'}"], capture_output=True, text=True, cwd=tmp_path)
     assert result.returncode == 2 and "'pressure_pa' has a missing or infinite value in line 2" in result.stderr
     assert result.stderr.strip().count("\n") == 0
-    assert not any((tmp_path / "run").glob("*.json")) and not (tmp_path / "run" / "pipeline.npz").exists()
+    run_folder = tmp_path / "run"
+    assert json.loads((run_folder / "status.json").read_text())["state"] == "failed"
+    assert not (run_folder / "metrics.json").exists() and not (run_folder / "pipeline.npz").exists()
 
 
 @pytest.mark.parametrize("kwargs", [
