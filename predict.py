@@ -13,9 +13,9 @@ import os
 import sys
 from pathlib import Path
 
-from data.atomic import atomic_write
-from data.errors import InputError
-from data.table_files import read_table_file
+from common.atomic import atomic_write
+from common.errors import InputError
+from data.readers.table_reader import read_table_file
 from export.onnx_predictor import OnnxPredictor
 
 KEYS = ("model", "input", "output", "threads")

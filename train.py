@@ -1,6 +1,6 @@
 """Train and evaluate one Touchstone model: `python train.py model=resmlp scene.n_samples=2000 seed=3`.
 
-Thin on purpose: Hydra composes the config, models/runs/run.py does the work, export/ writes the
+Thin on purpose: Hydra composes the config, runs/run.py does the work, export/ writes the
 ONNX file, and a user-input problem ends in one line on stderr and exit code 2 instead of a
 traceback.
 """
@@ -28,11 +28,12 @@ from hydra.errors import InstantiationException
 from hydra.types import RunMode
 from omegaconf import DictConfig, OmegaConf
 
-from data.config_checks import check_config
-from data.errors import InputError
-from data.progress import phase
-from data.run_status import config_hash, mark_failed, mark_finished, mark_running, prepare_folder
-from data.threads import apply_threads, resolve_threads
+from common.errors import InputError
+from common.progress import phase
+from common.run_status import config_hash, mark_failed, mark_finished, mark_running, prepare_folder
+from common.threads import apply_threads, resolve_threads
+from runs.config_checks import check_config
+
 # torch, scikit-learn and onnx are imported in main(), after the config has been checked (a typo
 # is reported in about a second) and the thread setting applied (pools start at the right size).
 
@@ -45,7 +46,7 @@ OmegaConf.register_new_resolver("process_id", os.getpid, replace=True)
 def main(cfg: DictConfig) -> float:
     output_dir = Path(HydraConfig.get().runtime.output_dir)
     # status.json says `running` first and `finished` (or `failed`) last; a run killed outright
-    # keeps `running`, which data/run_status.py reads as `interrupted` once its process is gone.
+    # keeps `running`, which common/run_status.py reads as `interrupted` once its process is gone.
     # A scheduler's time limit (SLURM) or a plain `kill` sends SIGTERM first: end as a failed run
     # with that reason rather than vanish mid-write (SIGKILL still reads as interrupted).
     signal.signal(signal.SIGTERM, terminated)
@@ -65,7 +66,7 @@ def main(cfg: DictConfig) -> float:
         with phase("start-up (imports)"):
             from export.latency import record_costs
             from export.run_export import export_run
-            from models.runs.run import run
+            from runs.run import run
         try:
             metrics = run(cfg, stage)
         except InstantiationException as error:
@@ -129,10 +130,10 @@ def as_input_error(error: InstantiationException) -> Exception:
 def check_overrides(argv: list[str]) -> None:
     """Compose the config once up front so that an unknown option or key (also one added with `+`
     that its target does not take), a malformed override, a missing mandatory value, or a setting
-    of the wrong type or out of range (data/config_checks.py: threads, seed, trainer.*, splits,
+    of the wrong type or out of range (runs/config_checks.py: threads, seed, trainer.*, splits,
     our components' parameters) is one line and exit code 2 like every other input error (Hydra
     would print a multi-line message and exit 1, torch a traceback), in about a second. Sweeps
-    and Hydra's own flags are left to Hydra; models/runs/run.py checks each job's config."""
+    and Hydra's own flags are left to Hydra; runs/run.py checks each job's config."""
     if any(arg.startswith("-") for arg in argv):
         return
     try:
@@ -152,7 +153,7 @@ def check_run_folder(argv: list[str]) -> None:
     """The folder this command will write into (hydra.run.dir, or hydra.sweep.dir for a sweep)
     must hold nothing from an earlier run, or one folder would mix two runs' files: checked here,
     before Hydra writes .hydra/ and train.log into it, and refused in one line with exit code 2,
-    or cleared with overwrite=true (data/run_status.py). The default folders, named by time and
+    or cleared with overwrite=true (common/run_status.py). The default folders, named by time and
     process id, are new. Hydra's other flags (--help, --cfg, ...) write no folder."""
     flags = {arg for arg in argv if arg.startswith("-")}
     if flags - {"-m", "--multirun"}:

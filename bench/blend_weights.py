@@ -22,7 +22,7 @@ from sklearn.metrics import r2_score
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from models.runs.run import seed_everything  # noqa: E402
+from runs.run import seed_everything  # noqa: E402
 
 DEFAULT = ["scene.protocol=random", "scene.n_samples=2000"]
 

@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from data.scenes.capacitive6x6 import correlation_factor_rmc_per_n, pressed_cell_rmc  # noqa: E402
-from data.run_status import run_status  # noqa: E402
+from common.run_status import run_status  # noqa: E402
 
 
 def run_row(run_dir: Path) -> dict:

@@ -44,7 +44,7 @@ sys.path.insert(0, str(ROOT))
 
 from models.contact_tracking.force import force_reader  # noqa: E402
 from models.contact_tracking.timing import latency_summary, timed_updates  # noqa: E402
-from models.runs.capacitive_tracking import fit_force_pipeline, make_tracker  # noqa: E402
+from runs.studies.capacitive_tracking import fit_force_pipeline, make_tracker  # noqa: E402
 
 
 def study_config(scene: str, seed: int, overrides=()):

@@ -17,8 +17,8 @@ from hydra.utils import instantiate
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from models.report.analysis import feature_ablation  # noqa: E402
-from models.runs.run import seed_everything  # noqa: E402
+from runs.report.analysis import feature_ablation  # noqa: E402
+from runs.run import seed_everything  # noqa: E402
 
 
 def main(argv=None):

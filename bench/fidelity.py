@@ -8,7 +8,7 @@
     .venv/bin/python bench/fidelity.py --scene fingertip --repeats 15   # seed 003 + Algorithm 1's diagnostic
 
 The observations are the notes file's (../shared/notes/seed-observations.md); one check per
-observation lives in bench/fidelity_checks.py, which says how each is measured and judged.
+observation lives in runs/fidelity/rubber12.py, which says how each is measured and judged.
 The scene is the composed Hydra config `scene=<config>` (default: the scene's default config).
 """
 import argparse
@@ -18,9 +18,6 @@ import time
 from dataclasses import asdict
 from pathlib import Path
 
-from hydra import compose, initialize_config_dir
-from omegaconf import OmegaConf
-
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
@@ -28,8 +25,8 @@ import numpy as np  # noqa: E402
 from sklearn.ensemble import ExtraTreesRegressor  # noqa: E402
 from sklearn.metrics import r2_score  # noqa: E402
 
-from bench.fidelity_checks import (  # noqa: E402
-    CHECKS,
+from runs.fidelity.observations import CHECKS, markdown, run_checks, scene_params  # noqa: E402
+from runs.fidelity.rubber12 import (  # noqa: E402
     CORNERS,
     SceneProbe,
     _sensitivity_per_mm,
@@ -37,14 +34,13 @@ from bench.fidelity_checks import (  # noqa: E402
     corners_least_sensitive,
     extra_trees_r2,
     mirror_ambiguity_worst_at_edges,
-    run_checks,
 )
-from bench.fidelity_fingertip import (  # noqa: E402
+from runs.fidelity.fingertip import (  # noqa: E402
     FingertipProbe,
     algorithm1_diagnostic,
     diagnostic_markdown,
 )
-from data.features import FEATURE_GROUPS, compute_features  # noqa: E402
+from data.preprocessing.features import FEATURE_GROUPS, compute_features  # noqa: E402
 
 PROBES = {"rubber12": SceneProbe, "fingertip": FingertipProbe}
 
@@ -52,23 +48,6 @@ PROBES = {"rubber12": SceneProbe, "fingertip": FingertipProbe}
 PATTERNS = {"adjacent": "adjacent", "i vs i+3": [[i, (i + 2) % 12 + 1] for i in range(1, 13)],
             "i vs i+4": [[i, (i + 3) % 12 + 1] for i in range(1, 13)], "near_opposite (i vs i+5)": "near_opposite",
             "opposite (i vs i+6)": "opposite"}
-
-
-def scene_params(config: str, overrides=()) -> dict:
-    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
-        composed = compose("config", overrides=[f"scene={config}", "seed=0", *overrides])
-    return OmegaConf.to_container(composed.scene, resolve=True)
-
-
-def markdown(rows) -> str:
-    verdict = {True: "holds", False: "does not hold", None: "not measured"}
-    lines = ["| # | paper's observation | paper's number | scene's measurement | tolerance | verdict |",
-             "|---|---|---|---|---|---|"]
-    for row in rows:
-        m = row.measured
-        lines.append(f"| {row.number} | {row.statement} | {row.paper} | {m.value} | {m.tolerance or '—'} | "
-                     f"{verdict[m.holds]} |")
-    return "\n".join(lines)
 
 
 def compare_patterns(config: str, overrides, repeats: int) -> str:

@@ -27,7 +27,7 @@ from export.latency import EAGER_BASELINE, measure  # noqa: E402
 from export.run_export import export_run  # noqa: E402
 from export.onnx_predictor import OnnxPredictor  # noqa: E402
 from models.deployable import RegressionPipeline, load_pipeline  # noqa: E402
-from models.runs.run import run  # noqa: E402
+from runs.run import run  # noqa: E402
 
 REGRESSION = ["resmlp", "random_forest", "extra_trees", "decision_tree", "blend"]
 CLASSIFICATION = ["prcnn", "rescnn", "inceptiontime", "lstm_fcn"]

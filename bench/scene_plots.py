@@ -21,7 +21,7 @@ from omegaconf import OmegaConf  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from data.atomic import atomic_write  # noqa: E402
+from common.atomic import atomic_write  # noqa: E402
 from data.scenes.fingertip import FingertipScene  # noqa: E402
 from data.scenes.rubber12 import Rubber12Scene  # noqa: E402
 

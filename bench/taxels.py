@@ -26,7 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 from data.physics.bonded_layer import base_traction_pa, layer_kernels  # noqa: E402
 from data.physics.elastic_half_space import point_load_strain  # noqa: E402
-from data.run_status import run_status  # noqa: E402
+from common.run_status import run_status  # noqa: E402
 
 VARIANTS = ("taxels_minimal", "taxels_flat", "taxels", "taxels_bump", "taxels_ridge", "taxels_hair")
 

@@ -35,7 +35,7 @@ def prcnn_epoch() -> None:
     from hydra import compose, initialize_config_dir
     from hydra.utils import instantiate
 
-    from data.threads import apply_threads, resolve_threads
+    from common.threads import apply_threads, resolve_threads
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
         cfg = compose("config", overrides=["experiment=materials10", "trainer.max_epochs=1",
                                            "trainer.progress=false", "trainer.device=cpu"])

@@ -1,5 +1,3 @@
-"""Data side of Touchstone: simulated scenes (scenes/), the physics they build on (physics/),
-users' tables and recordings, features, splits, windows and the datamodules.
-
-Nothing in this package imports `models/` or `export/`: data flows train.py -> data -> models -> export.
-"""
+"""What the models see: simulated scenes (scenes/) and the physics they build on (physics/),
+users' files (readers/), the tables and recording sets both become, preprocessing, splits and the
+datamodules. Imports only common/ below it (tests/test_house.py)."""

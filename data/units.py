@@ -5,7 +5,7 @@ underscore-separated word (`r_01_ohm`, `depth_mm`, `pressure_pa`, `force_level_n
 `triboelectric_na`). This module reads that word, case-insensitively, and says which quantity the
 column holds and the closed interval its values can lie in: a reading outside it is a broken
 file or a wrong unit, not data to learn from. The validators refuse such values
-(data/table_files.py, data/recording_files.py); interval bounds may be clipped to the same range.
+(data/readers/table_reader.py, data/readers/recording_reader.py); interval bounds may be clipped to the same range.
 
     physical_range("r_03_ohm")    -> PhysicalRange("resistance", 0.0, inf, ...)
     physical_range("shear_x_n")   -> None   (a force component: any sign)

@@ -20,9 +20,9 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from data.atomic import atomic_write_json
-from data.errors import InputError
-from data.progress import progress
+from common.atomic import atomic_write_json
+from common.errors import InputError
+from common.progress import progress
 from export.onnx_predictor import OnnxPredictor
 from models.deployable import PIPELINE_FILE, RegressionPipeline, load_pipeline
 

@@ -15,9 +15,9 @@ import numpy as np
 import onnxruntime as ort
 import pandas as pd
 
-from data.errors import InputError
-from data.table_files import check_numeric_columns, where
-from data.threads import configured_threads
+from common.errors import InputError
+from common.threads import configured_threads
+from data.readers.table_reader import check_numeric_columns, where
 
 KINDS = ("regression", "classification")
 # The graph's one input and its first output per kind (export/pipelines.py writes them).
@@ -28,7 +28,7 @@ INPUT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}
 
 class OnnxPredictor:
     def __init__(self, path, threads: int | None = None):
-        """threads: intra-op threads; None = the Touchstone setting in force (data/threads.py),
+        """threads: intra-op threads; None = the Touchstone setting in force (common/threads.py),
         0 = onnxruntime's own default (one per core)."""
         self.path = str(path)
         if not Path(path).is_file():

@@ -14,7 +14,7 @@ import numpy as np
 import onnx
 from onnx import TensorProto, helper, numpy_helper
 
-from data.errors import InputError
+from common.errors import InputError
 
 
 def _const(name, array, dtype=np.float32):

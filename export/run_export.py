@@ -13,9 +13,9 @@ from pathlib import Path
 
 from omegaconf import OmegaConf
 
-from data.atomic import atomic_write
-from data.errors import InputError
-from data.run_status import config_hash
+from common.atomic import atomic_write
+from common.errors import InputError
+from common.run_status import config_hash
 from export.pipelines import export_pipeline
 from models.deployable import PIPELINE_FILE, load_pipeline
 

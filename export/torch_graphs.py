@@ -2,8 +2,8 @@
 
 The preprocessing steps themselves are not restated here: the min-max normalisation, the physics
 features, the FSR calibration and the decimation are the data side's own torch code
-(data/minmax_scaling.py, data/features.py, data/physics/force_sensing_resistor.py,
-data/windows.py), the same code training ran. Normalisation and features run in float64; the
+(data/preprocessing/minmax_scaling.py, data/preprocessing/features.py, data/physics/force_sensing_resistor.py,
+data/preprocessing/windows.py), the same code training ran. Normalisation and features run in float64; the
 rest of the graph in float32.
 """
 import contextlib
@@ -15,9 +15,10 @@ import onnx
 import torch
 from torch import nn
 
-from data.features import PhysicsFeatures
 from data.physics.force_sensing_resistor import CALIBRATION_KEYS, FsrCalibration
-from data.windows import decimate
+from data.preprocessing.features import PhysicsFeatures
+from data.preprocessing.windows import decimate
+
 
 class RegressionFrontEnd(nn.Module):
     """raw readings (float64) -> the data set's min-max normalisation, if the model was trained on

@@ -26,7 +26,7 @@ from sklearn.linear_model import LinearRegression
 from sklearn.svm import SVR
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from data.errors import InputError
+from common.errors import InputError
 
 KINDS = ("linear_regression", "svr", "gaussian_process")
 

@@ -13,11 +13,11 @@ from pathlib import Path
 
 import numpy as np
 
-from data.errors import InputError
-from data.features import compute_features, enabled_groups
-from data.minmax_scaling import MinMaxScaling
+from common.errors import InputError
 from data.physics.force_sensing_resistor import CALIBRATION_KEYS, calibrated_channel_name, fsr_force_n
-from data.windows import decimate
+from data.preprocessing.features import compute_features, enabled_groups
+from data.preprocessing.minmax_scaling import MinMaxScaling
+from data.preprocessing.windows import decimate
 from models.fitted_state import load_fitted, save_fitted
 
 PIPELINE_FILE = "pipeline.npz"  # in a run folder

@@ -46,8 +46,8 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from data.atomic import atomic_write
-from data.errors import InputError
+from common.atomic import atomic_write
+from common.errors import InputError
 
 FORMAT, VERSION = "touchstone fitted state", 1
 STRUCTURE = "structure"
@@ -60,7 +60,7 @@ ALLOWED_CLASSES = frozenset({
     # what a run deploys, and our estimators and networks
     "models.deployable.RegressionPipeline",
     "models.deployable.TimeSeriesPipeline",
-    "data.minmax_scaling.MinMaxScaling",
+    "data.preprocessing.minmax_scaling.MinMaxScaling",
     "models.resmlp_regressor.ResMLPRegressor",
     "models.trees.TreeRegressor",
     "models.classic_regressors.ClassicRegressor",

@@ -17,9 +17,9 @@ import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted, validate_data
-from data.progress import progress
 
-from data.splits import kfold_indices
+from common.progress import progress
+from data.splits.indices import kfold_indices
 from models.uncertainty import IntervalMixin
 
 log = logging.getLogger(__name__)

@@ -16,10 +16,10 @@ import torch
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
-from data.progress import progress
 
-from data.errors import InputError
-from data.splits import carve_validation
+from common.errors import InputError
+from common.progress import progress
+from data.splits.indices import carve_validation
 from models.nets.resmlp import ResMLP
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 

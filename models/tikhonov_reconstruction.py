@@ -27,7 +27,7 @@ from scipy.ndimage import correlate
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.sheet_conduction import (
     PatchUpdateSolver,
     SheetGrid,

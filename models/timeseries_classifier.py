@@ -36,8 +36,8 @@ import torch
 from sklearn.base import BaseEstimator, ClassifierMixin
 from torch import nn
 
-from data.errors import InputError
-from data.progress import HEARTBEAT_S, on_terminal, progress
+from common.errors import InputError
+from common.progress import HEARTBEAT_S, on_terminal, progress
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
 OPTIMISERS = ("sgd", "adam")

@@ -10,8 +10,8 @@ from sklearn.multioutput import MultiOutputRegressor
 from sklearn.tree import DecisionTreeRegressor
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from data.errors import InputError
-from data.threads import configured_threads
+from common.errors import InputError
+from common.threads import configured_threads
 
 KINDS = ("random_forest", "extra_trees", "decision_tree")
 
@@ -29,7 +29,7 @@ class TreeRegressor(RegressorMixin, BaseEstimator):
         self.seed = seed
 
     def _base(self):
-        # n_jobs None: the run's thread setting (data/threads.py), so forests do not fight
+        # n_jobs None: the run's thread setting (common/threads.py), so forests do not fight
         # whatever else runs on the machine; -1 still means every core.
         n_jobs = self.n_jobs if self.n_jobs is not None else (configured_threads() or 1)
         common = dict(max_depth=self.max_depth, max_features=self.max_features,

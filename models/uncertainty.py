@@ -15,7 +15,7 @@ group level) - the spread over recordings is what one test recording's coverage 
 """
 import numpy as np
 
-from data.errors import InputError
+from common.errors import InputError
 
 Z_95 = 1.959963984540054
 

@@ -26,9 +26,9 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted, validate_data
 
-from data.progress import progress
-from data.errors import InputError
-from data.splits import carve_validation
+from common.errors import InputError
+from common.progress import progress
+from data.splits.indices import carve_validation
 from models.kfold_blend import KFoldBlend
 from models.uncertainty import IntervalMixin
 

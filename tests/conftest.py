@@ -1,13 +1,12 @@
 import inspect
-from pathlib import Path
-
 import os
+from pathlib import Path
 
 import pytest
 from hydra import compose, initialize_config_dir
 from hypothesis import HealthCheck, settings
 
-from data.threads import apply_threads, resolve_threads
+from common.threads import apply_threads, resolve_threads
 
 # One thread per library, as train.py's default: tests run beside each other and other work.
 apply_threads(resolve_threads(os.environ.get("TOUCHSTONE_THREADS", "1")))

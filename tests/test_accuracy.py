@@ -1,7 +1,7 @@
 """Accuracy floors with margin on a moderately sized simulated set (random positions and depths)."""
 import pytest
 
-from models.runs.run import run
+from runs.run import run
 
 
 def test_extra_trees_locates_presses_on_unseen_points(compose_config, tmp_path):

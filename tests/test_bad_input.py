@@ -10,19 +10,19 @@ import onnxruntime as ort
 import pandas as pd
 import pytest
 import torch
+from conftest import tiny
 from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from conftest import tiny
-from data.errors import InputError
-from data.features import compute_features
-from data.recording_files import load_npz
+from common.errors import InputError
+from data.preprocessing.features import compute_features
+from data.readers.recording_reader import load_npz
 from export.onnx_predictor import OnnxPredictor
 from export.run_export import export_run
 from export.torch_graphs import RegressionFrontEnd, to_onnx
 from models.deployable import load_pipeline
-from models.runs.run import run
+from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 

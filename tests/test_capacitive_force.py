@@ -6,13 +6,13 @@ import numpy as np
 import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from data.errors import InputError
+from common.errors import InputError
 from data.scenes.capacitive6x6 import Capacitive6x6Scene, correlation_factor_rmc_per_n, pressed_cell_rmc
 from export.onnx_predictor import OnnxPredictor
 from export.run_export import export_run
 from models.classic_regressors import ClassicRegressor
 from models.deployable import load_pipeline
-from models.runs.run import run
+from runs.run import run
 
 PAPER_MODELS = ["linear_regression", "svr", "gaussian_process"]
 
@@ -57,8 +57,8 @@ def test_linear_models_recover_a_linear_law_in_units():
 @pytest.fixture(scope="module")
 def force_runs(tmp_path_factory):
     """One tiny characterisation run per paper model through the shared pipeline, exported."""
-    from hydra import compose, initialize_config_dir
     from conftest import CONFIG_DIR
+    from hydra import compose, initialize_config_dir
     runs = {}
     for model in PAPER_MODELS:
         out = tmp_path_factory.mktemp(model)

@@ -9,11 +9,11 @@ import pytest
 from hydra.errors import InstantiationException
 from PIL import Image
 
-from data.contact_streams import save_frames_csv
-from data.errors import InputError
+from common.errors import InputError
+from data.readers.contact_streams import save_frames_csv
 from export.run_export import export_run
-from models.runs.capacitive_tracking import load_stream
-from models.runs.run import run
+from runs.run import run
+from runs.studies.capacitive_tracking import load_stream
 
 TINY = ["experiment=capacitive_tracking", "scene.sessions=[hold,cross]", "scene.session_s=1.0", "scene.gap_s=0.2",
         "scene.n_rest_frames=30", "study.force_repetitions=3", "study.animation.max_frames=4",

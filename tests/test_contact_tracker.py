@@ -6,24 +6,24 @@ import pandas as pd
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from skimage.filters import threshold_otsu
+from skimage.measure import label
 from sklearn.base import clone
 from sklearn.linear_model import LinearRegression
 from sklearn.preprocessing import MinMaxScaler
-from skimage.filters import threshold_otsu
-from skimage.measure import label
 
-from data.contact_windows import window_channel_names
-from data.errors import InputError
-from data.features import compute_features, feature_names
+from common.errors import InputError
+from data.preprocessing.contact_windows import window_channel_names
+from data.preprocessing.features import compute_features, feature_names
 from models.classic_regressors import ClassicRegressor
 from models.contact_tracking import ContactTracker
 from models.contact_tracking.force import force_reader, is_affine
-from models.contact_tracking.timing import latency_summary, timed_updates
 from models.contact_tracking.otsu_threshold import otsu_threshold
 from models.contact_tracking.paper import track_clusters
+from models.contact_tracking.timing import latency_summary, timed_updates
 from models.contact_tracking.tracks import new_track, remember
 from models.deployable import RegressionPipeline
-from models.report.tracking_metrics import evaluate_tracking, frame_groups
+from runs.report.tracking_metrics import evaluate_tracking, frame_groups
 
 PITCH = 6.0
 PAPER = dict(threshold="variance", segmentation="paper", tracking="paper")

@@ -1,11 +1,11 @@
 import numpy as np
 import pytest
 
-from data.splits import kfold_indices
-from data.regression_datamodule import RegressionDataModule, from_table
-from data.errors import InputError
-from data.features import FEATURE_GROUPS
+from common.errors import InputError
+from data.datamodules.regression import RegressionDataModule, from_table
+from data.preprocessing.features import FEATURE_GROUPS
 from data.scenes.rubber12 import Rubber12Scene
+from data.splits.indices import kfold_indices
 
 ALL = {g: True for g in FEATURE_GROUPS}
 CHANNELS = [f"r_{k:02d}_ohm" for k in range(1, 13)]

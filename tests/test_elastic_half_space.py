@@ -9,10 +9,15 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.elastic_half_space import (
-    DEFAULT_CORE_RADIUS_M, disc_quadrature, displacement_gradient, distributed_load_strain,
-    point_load_strain, vertical_stress_pa)
+    DEFAULT_CORE_RADIUS_M,
+    disc_quadrature,
+    displacement_gradient,
+    distributed_load_strain,
+    point_load_strain,
+    vertical_stress_pa,
+)
 
 E_PA = 2.4e6  # Elastosil, seed 004
 

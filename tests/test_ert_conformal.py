@@ -4,7 +4,7 @@ exchangeable units."""
 import numpy as np
 import pytest
 
-from data.errors import InputError
+from common.errors import InputError
 from data.scenes.ert import ERTScene
 from models.uncertainty import conformal_quantile, leave_one_group_out_coverage
 

@@ -5,7 +5,7 @@ import pytest
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.sheet_conduction import (
     PatchUpdateSolver,
     SheetGrid,

@@ -10,7 +10,7 @@ from hydra.utils import instantiate
 from export.onnx_predictor import OnnxPredictor
 from export.run_export import export_run
 from models.deployable import load_pipeline
-from models.runs.run import run
+from runs.run import run
 
 TINY_ERT = ["scene=ert_internal", "scene.protocol=random", "scene.grid_nodes=21", "scene.injection=adjacent",
             "scene.n_samples=160", "analysis.ablation=false"]

@@ -4,7 +4,7 @@ import numpy as np
 import onnxruntime as ort
 import pytest
 
-from data.errors import InputError
+from common.errors import InputError
 from data.scenes.ert import ERTScene
 from export.reconstruction_graphs import predict_with_onnx, tikhonov_to_onnx
 from models.tikhonov_reconstruction import (

@@ -6,7 +6,7 @@ from hydra.utils import instantiate
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from data.errors import InputError
+from common.errors import InputError
 from data.scenes.ert import ERTScene, injection_pairs
 from data.scenes.ert_effects import EFFECTS
 from models.tikhonov_reconstruction import TikhonovReconstruction

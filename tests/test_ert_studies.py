@@ -3,9 +3,9 @@ import json
 
 import pytest
 
-from data.errors import InputError
-from models.runs.ert_learned import run_learned
-from models.runs.run import run
+from common.errors import InputError
+from runs.run import run
+from runs.studies.ert_learned import run_learned
 
 TINY = ["study.seeds=[0,1]", "study.calibration.grid_points_per_side=4", "scene.grid_points_per_side=4",
         "scene.grid_nodes=21", "study.reconstruction.pixels_per_side=8", "scene.injection=adjacent"]

@@ -9,15 +9,15 @@ import numpy as np
 import onnx
 import pandas as pd
 import pytest
+from conftest import tiny
 from omegaconf import OmegaConf
 
-from conftest import tiny
-from data.run_status import config_hash
+from common.run_status import config_hash
 from data.scenes.fingertip import FingertipScene
-from export.run_export import export_run
 from export.onnx_predictor import OnnxPredictor
+from export.run_export import export_run
 from models.deployable import load_pipeline
-from models.runs.run import run
+from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 REGRESSORS = ["resmlp", "random_forest", "extra_trees", "decision_tree", "blend"]

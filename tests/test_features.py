@@ -2,8 +2,8 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from data.errors import InputError
-from data.features import FEATURE_GROUPS, compute_features, feature_names
+from common.errors import InputError
+from data.preprocessing.features import FEATURE_GROUPS, compute_features, feature_names
 
 CHANNELS = [f"r_{k:02d}_ohm" for k in range(1, 13)]
 ALL = {g: True for g in FEATURE_GROUPS}

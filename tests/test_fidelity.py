@@ -1,19 +1,20 @@
 """The fidelity table's rows that hold for rubber12 (bench/fidelity.py, docs/fidelity.md) keep
 holding, with margin: each test measures one observation of the seed paper on the scene the way
-the table does (bench/fidelity_checks.py), with fewer repeats, and asserts it clear of the
+the table does (runs/fidelity/rubber12.py), with fewer repeats, and asserts it clear of the
 table's tolerance. Rows that do not hold are not asserted (the table records them and why)."""
 import json
+from dataclasses import asdict
 
 import pytest
 
-from bench import fidelity
-from bench import fidelity_checks as checks
-from bench.fidelity_checks import CHECKS, SceneProbe
+from runs.fidelity import rubber12 as checks
+from runs.fidelity.observations import CHECKS, Row, markdown, scene_params
+from runs.fidelity.rubber12 import SceneProbe
 
 
 @pytest.fixture(scope="module")
 def probe():
-    return SceneProbe(fidelity.scene_params("rubber12"), repeats=8)
+    return SceneProbe(scene_params("rubber12"), repeats=8)
 
 
 def test_every_observation_of_the_notes_has_a_row():
@@ -54,19 +55,19 @@ def test_incremental_sensitivity_falls_at_high_force(probe):
 
 
 def test_table_prints_every_row_with_a_verdict(probe, capsys):
-    rows = [checks.Row("rubber12", *fn.observation[1:], fn(probe)) for fn in CHECKS["rubber12"]
+    rows = [Row("rubber12", *fn.observation[1:], fn(probe)) for fn in CHECKS["rubber12"]
             if fn not in (checks.extra_trees_r2, checks.uncertainty_pattern)]   # the forest rows are slow
-    text = fidelity.markdown(rows)
+    text = markdown(rows)
     assert text.count("\n") == len(rows) + 1
     verdicts = [line.rsplit("|", 2)[-2].strip() for line in text.splitlines()[2:]]
     assert set(verdicts) <= {"holds", "does not hold", "not measured"} and "holds" in verdicts
-    json.dumps([fidelity.asdict(row) for row in rows])   # the --json output is serialisable
+    json.dumps([asdict(row) for row in rows])   # the --json output is serialisable
 
 
 @pytest.mark.slow
 def test_kfold_blending_steadies_the_net():
     """Row 13 (seed §IV-D: K-fold blending reduced the net's prediction variance, 8.3 %), measured
-    as bench/kfold_variance.py does with the documented settings (table: 10.5-66.6 %), ~3 min."""
-    from bench import kfold_variance
-    reduction = kfold_variance.measure(seeds=5, folds=5)["reduction"]
+    as bench/kfold_variance.py prints it with the documented settings (table: 10.5-66.6 %), ~3 min."""
+    from runs.fidelity.kfold_variance import measure
+    reduction = measure(seeds=5, folds=5)["reduction"]
     assert (reduction > 0.05).all(), reduction

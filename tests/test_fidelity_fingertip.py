@@ -1,16 +1,21 @@
-"""The fingertip fidelity rows that hold (bench/fidelity_fingertip.py, docs/fidelity.md) keep
+"""The fingertip fidelity rows that hold (runs/fidelity/fingertip.py, docs/fidelity.md) keep
 holding, with margin, on fewer passes than the table; and Algorithm 1's diagnostic is measured."""
+import subprocess
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 
-from bench import fidelity
-from bench import fidelity_fingertip as rows
-from bench.fidelity_checks import CHECKS
+from runs.fidelity import fingertip as rows
+from runs.fidelity.observations import CHECKS, scene_params
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 @pytest.fixture(scope="module")
 def probe():
-    return rows.FingertipProbe(fidelity.scene_params("fingertip"), repeats=6)
+    return rows.FingertipProbe(scene_params("fingertip"), repeats=6)
 
 
 def test_every_observation_of_seed_003_has_a_row():
@@ -50,7 +55,7 @@ def test_algorithm1_diagnostic_covers_every_class_and_unseen_level(probe):
     assert text.count("\n") == 2 + 10 + 1 + 2 + 6 - 1      # two tables, a blank line between
 
 
-def test_fidelity_script_prints_the_fingertip_table(capsys):
-    fidelity.main(["--scene", "fingertip", "--repeats", "2"])
-    out = capsys.readouterr().out
+def test_fidelity_script_prints_the_fingertip_table():
+    out = subprocess.run([sys.executable, str(ROOT / "bench" / "fidelity.py"), "--scene", "fingertip", "--repeats", "2"],
+                         capture_output=True, text=True, check=True).stdout
     assert "3 of 3 measured rows hold" in out and "Algorithm 1's cubic" in out

@@ -12,12 +12,12 @@ import pandas as pd
 import pytest
 import torch
 import yaml
-
 from conftest import tiny
-from data.config_checks import check_target_keys, target_parameters
-from data.errors import InputError
-from data.progress import phase, progress
-from data.threads import apply_threads, configured_threads, resolve_threads
+
+from common.errors import InputError
+from common.progress import phase, progress
+from common.threads import apply_threads, configured_threads, resolve_threads
+from runs.config_checks import check_target_keys, target_parameters
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -159,7 +159,7 @@ def test_predictions_csv_feeds_predict_py_with_the_same_columns(tmp_path):
 
 def test_a_long_loop_off_a_terminal_says_how_far_it_is(caplog, monkeypatch):
     monkeypatch.setenv("CI", "true")
-    monkeypatch.setattr("data.progress.HEARTBEAT_S", 0.0)    # every round counts as long
+    monkeypatch.setattr("common.progress.HEARTBEAT_S", 0.0)    # every round counts as long
     with caplog.at_level(logging.INFO, logger="touchstone"):
         for _ in progress(range(3), desc="epochs", unit="epochs"):
             pass

@@ -1,7 +1,7 @@
 """Generated bad files through every reader train.py and predict.py use, called as they call them:
 CSV and Parquet tables through the regression datamodule's setup (`data=table`), NPZ recordings
 and long tables of recordings through the time-series datamodule's setup (`data=recordings_npz`,
-`data=recordings_table`), frame streams through data/contact_streams.py (the capacitive tracking
+`data=recordings_table`), frame streams through data/readers/contact_streams.py (the capacitive tracking
 study's reader), ONNX models with malformed metadata and bad input tables through predict.py's
 main(argv); and a few end to end through the commands as subprocesses.
 
@@ -34,12 +34,20 @@ from hydra.errors import InstantiationException
 from hydra.utils import instantiate
 from hypothesis import given
 from hypothesis import strategies as st
-
-from data.contact_streams import frames_from_lines, load_frames
-from data.errors import InputError
+from predict_support import (
+    CHANNELS,
+    WINDOW_STEPS,
+    classification_metadata,
+    classification_model,
+    predict_main,
+    regression_metadata,
+    regression_model,
+    save,
+)
 from test_properties import examples
-from predict_support import (CHANNELS, WINDOW_STEPS, classification_metadata, classification_model, predict_main,
-                             regression_metadata, regression_model, save)
+
+from common.errors import InputError
+from data.readers.contact_streams import frames_from_lines, load_frames
 
 ROOT = Path(__file__).resolve().parents[1]
 FILES = {"csv_table": 350, "parquet_table": 250, "npz": 350, "long_table": 300, "frames_csv": 200,
@@ -105,7 +113,7 @@ def all_finite(*arrays, dtype=np.float64) -> bool:
 
 
 def train_datamodule(cfg, **changes):
-    """What train.py does with a composed config (models/runs/run.py): instantiate(cfg.data).setup(),
+    """What train.py does with a composed config (runs/run.py): instantiate(cfg.data).setup(),
     here with `changes` merged into cfg.data; a constructor's InputError is its one line, as train.py
     makes it."""
     try:
@@ -693,7 +701,7 @@ def test_bad_input_tables_through_predict(tmp_path):
 # -- what the "thorough" profile found, kept as fixed cases ---------------------------------------
 def test_a_float16_group_column_groups_by_its_values(tmp_path, compose_config):
     """pandas cannot group a float16 column ("float16 indexes are not supported", a traceback from
-    data/tables.py): a group column that is a target is grouped by its checked float64 values."""
+    data/sensor_table.py): a group column that is a target is grouped by its checked float64 values."""
     values = table_values(0, 20)
     table = pa.table({**{c: values[c] for c in TABLE_CHANNELS}, "x_mm": values["x_mm"].astype(np.float16),
                       "pressure_pa": values["pressure_pa"]})

@@ -54,7 +54,7 @@ def test_two_tiny_trials_from_the_command_line(tmp_path):
 
 
 def test_trial_labels_are_short_but_never_merge_two_trials():
-    from models.report.pareto import _labels
+    from runs.report.pareto import _labels
     assert _labels([{"model.lr": "0.00064664227", "seed": "0"}, {"model.lr": "0.0012345678", "seed": "0"}]) == [
         "lr=0.0006466", "lr=0.001235"]
     close = _labels([{"model.lr": "0.00064664227"}, {"model.lr": "0.00064664991"}])

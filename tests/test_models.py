@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 from sklearn.base import clone
 
-from data.errors import InputError
+from common.errors import InputError
 from models.nets.resmlp import ResMLP
 from models.resmlp_regressor import ResMLPRegressor
 from models.trees import TreeRegressor

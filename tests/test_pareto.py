@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from models.report.pareto import pareto_mask, summarise
+from runs.report.pareto import pareto_mask, summarise
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ["scene.n_samples=120", "scene.grid_nodes=21", "scene.progress=false", "analysis.ablation=false",
@@ -71,7 +71,7 @@ def test_a_failed_job_is_listed_as_failed(tmp_path):
     failed = report[report["status"] == "failed"]
     assert len(failed) == 1 and "n_samples must be a positive integer" in failed["error"].iloc[0]
     assert "Failed jobs" in (folder / "pareto.md").read_text()
-    by_hand = subprocess.run([sys.executable, "-m", "models.report.pareto", str(folder)], capture_output=True, text=True,
+    by_hand = subprocess.run([sys.executable, "-m", "runs.report.pareto", str(folder)], capture_output=True, text=True,
                              cwd=ROOT)
     assert by_hand.returncode == 0 and "Failed jobs" in by_hand.stdout
 

@@ -1,18 +1,18 @@
-"""data.split=predefined: the train / val / test sides a user's file declares (data/splits.py),
+"""data.split=predefined: the train / val / test sides a user's file declares (data/splits/indices.py),
 for recordings (NPZ array, long-table column) and regression tables (a split column)."""
 import numpy as np
 import pandas as pd
 import pytest
+from hydra.utils import instantiate
 from hypothesis import given
 from hypothesis import strategies as st
-from hydra.utils import instantiate
 
-from data.errors import InputError
-from data.recording_files import load_long_table, load_npz
-from data.regression_datamodule import RegressionDataModule
-from data.splits import predefined_split
-from data.tables import SensorTable
-from data.timeseries_datamodule import TimeSeriesDataModule
+from common.errors import InputError
+from data.datamodules.regression import RegressionDataModule
+from data.datamodules.timeseries import TimeSeriesDataModule
+from data.readers.recording_reader import load_long_table, load_npz
+from data.sensor_table import SensorTable
+from data.splits.indices import predefined_split
 
 FEATURES_RAW = {"raw": True, "log1p": False, "sqrt": False, "zscore": False, "stats": False,
                 "pair_products": False, "pair_ratios": False}

@@ -10,11 +10,20 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from predict_support import (
+    CHANNELS,
+    CLASSES,
+    WINDOW_STEPS,
+    classification_metadata,
+    classification_model,
+    predict_main,
+    regression_metadata,
+    regression_model,
+    save,
+)
 
-from data.errors import InputError
+from common.errors import InputError
 from export.onnx_predictor import OnnxPredictor
-from predict_support import (CHANNELS, CLASSES, WINDOW_STEPS, classification_metadata, classification_model,
-                             predict_main, regression_metadata, regression_model, save)
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -47,7 +56,7 @@ def recording(steps=2 * WINDOW_STEPS, **cells) -> pd.DataFrame:
 
 
 # -- values that are not finite in the model's dtype --------------------------------------
-# A table's values are checked where the table is read (data/table_files.py: finite in float32,
+# A table's values are checked where the table is read (data/readers/table_reader.py: finite in float32,
 # the dtype the models compute in) and again by the predictor against the graph's own input dtype;
 # either names the file, the column, the line and the value.
 @pytest.mark.parametrize("value", [1e308, -1e308, 3.5e38])

@@ -13,12 +13,12 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from data.errors import InputError
-from data.features import FEATURE_GROUPS, compute_features
-from data.virtual_force_levels import virtual_force_levels
-from models.report.metrics import regression_metrics
-from models.weighted_blend import validation_weights
+from common.errors import InputError
+from data.preprocessing.features import FEATURE_GROUPS, compute_features
+from data.preprocessing.virtual_force_levels import virtual_force_levels
 from models.uncertainty import conformal_quantile, normalised_scores
+from models.weighted_blend import validation_weights
+from runs.report.metrics import regression_metrics
 
 ALL = list(FEATURE_GROUPS)
 def examples(n):

@@ -4,9 +4,9 @@ over-fitting observation compares it with the accuracy at unseen levels)."""
 import numpy as np
 import pytest
 
-from data.errors import InputError
+from common.errors import InputError
+from data.datamodules.timeseries import TimeSeriesDataModule
 from data.scenes.fingertip import FingertipScene
-from data.timeseries_datamodule import TimeSeriesDataModule
 
 
 def datamodule(**kwargs):

@@ -13,8 +13,8 @@ import pandas as pd
 import pytest
 from hydra.utils import instantiate
 
-from data.errors import InputError
-from data.recording_files import load_long_table, load_npz
+from common.errors import InputError
+from data.readers.recording_reader import load_long_table, load_npz
 from export.pipelines import metadata_for
 from models.deployable import TimeSeriesPipeline
 

@@ -7,9 +7,9 @@ import torch
 from hydra.utils import instantiate
 from torch import nn
 
-from bench.tsc_reference import MODELS, OPTIMUM, fit_one, generate, split
 from models.nets.prcnn import PRCNN
 from models.timeseries_classifier import TimeSeriesClassifier
+from runs.reference_tasks import MODELS, OPTIMUM, fit_one, generate, split
 
 SMALL_PRCNN = functools.partial(PRCNN, branch_width=8, fusion_width=8)
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 import torch
 
-from bench.tsc_reference import generate, split
-from data.errors import InputError
+from common.errors import InputError
 from models.nets.lstm_fcn import LSTMFCN
 from models.timeseries_classifier import CHECKPOINT_KEYS, TimeSeriesClassifier
+from runs.reference_tasks import generate, split
 
 # LSTM-FCN for its dropout: the resumed run must continue the global RNG stream, not restart it
 SMALL_LSTM_FCN = functools.partial(LSTMFCN, hidden=8, widths=(8, 8, 8), dropout=0.5)
@@ -79,7 +79,7 @@ def test_resuming_with_another_configuration_is_a_one_line_error(data, tmp_path)
 
 
 def test_a_run_through_hydra_keeps_its_checkpoint_in_the_run_folder(compose_config, tmp_path):
-    from models.runs.run import run
+    from runs.run import run
     X, y = generate("frequency", 40, seed=0)
     np.savez(tmp_path / "rig.npz", X=X, y=y)
     common = ["data=recordings_npz", f"data.source.path={tmp_path / 'rig.npz'}", "model=prcnn", "trainer=reference",

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.force_sensing_resistor import (
     FsrCalibration,
     amplifier_voltage_v,

@@ -19,9 +19,17 @@ import pandas as pd
 import pytest
 from omegaconf import OmegaConf
 
-from data.errors import InputError
-from data.run_status import (ERROR_FILE, STATUS_FILE, config_hash, mark_failed, mark_finished, mark_running,
-                             prepare_folder, run_status)
+from common.errors import InputError
+from common.run_status import (
+    ERROR_FILE,
+    STATUS_FILE,
+    config_hash,
+    mark_failed,
+    mark_finished,
+    mark_running,
+    prepare_folder,
+    run_status,
+)
 from export.onnx_predictor import OnnxPredictor
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -73,7 +81,7 @@ def test_a_run_records_running_then_finished_or_failed(tmp_path):
 
 def test_a_run_whose_process_is_gone_reads_interrupted(tmp_path):
     # a process that records `running` and ends without a last record, as kill -9 would leave it
-    code = f"from data.run_status import mark_running; mark_running({str(tmp_path)!r}, 'x')"
+    code = f"from common.run_status import mark_running; mark_running({str(tmp_path)!r}, 'x')"
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)))
     status = run_status(tmp_path)
     assert status.state == "interrupted" and "killed" in status.reason
@@ -202,7 +210,7 @@ def test_overwrite_clears_a_sweep_folder(tmp_path):
 
 
 def test_the_sweep_report_counts_only_finished_jobs(tmp_path):
-    from models.report.pareto import collect_jobs
+    from runs.report.pareto import collect_jobs
     metrics = {"val": {"average": {"r2": 0.9}}, "test": {"average": {"r2": 0.8}}, "cost": {"fit_time_s": 1.0}}
     for job in ("0", "1"):
         (tmp_path / job / ".hydra").mkdir(parents=True)
@@ -210,7 +218,7 @@ def test_the_sweep_report_counts_only_finished_jobs(tmp_path):
         (tmp_path / job / "metrics.json").write_text(json.dumps(metrics))
     mark_finished(tmp_path / "0", mark_running(tmp_path / "0", "x"))
     # job 1 was killed while its artefacts were moving in: metrics.json is there, its last record is not
-    code = f"from data.run_status import mark_running; mark_running({str(tmp_path / '1')!r}, 'x')"
+    code = f"from common.run_status import mark_running; mark_running({str(tmp_path / '1')!r}, 'x')"
     subprocess.run([sys.executable, "-c", code], check=True, cwd=ROOT, env=dict(os.environ, PYTHONPATH=str(ROOT)))
     jobs = collect_jobs(tmp_path).set_index("job")
     assert jobs.loc["0", "status"] == "ok" and jobs.loc["0", "val_score"] == 0.9

@@ -9,14 +9,14 @@ import numpy as np
 import pandas as pd
 import pytest
 import torch
+from conftest import tiny
 from hydra.utils import instantiate
 
-from conftest import tiny
-from data.errors import InputError
+from common.errors import InputError
 from data.scenes.fingertip import FingertipScene
 from models.resmlp_regressor import ResMLPRegressor
-from models.runs.run import run
 from models.torch_runtime import flushing_denormals
+from runs.run import run
 
 TARGETS = ["x_mm", "y_mm", "depth_mm", "pressure_pa"]
 

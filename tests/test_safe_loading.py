@@ -16,12 +16,11 @@ import torch
 from hydra.errors import InstantiationException
 from sklearn.base import clone
 
-from bench.tsc_reference import generate
-from data.contact_streams import load_frames
-from data.errors import InputError
-from data.minmax_scaling import MinMaxScaling
-from data.recording_files import load_npz
-from data.table_files import read_table_file
+from common.errors import InputError
+from data.preprocessing.minmax_scaling import MinMaxScaling
+from data.readers.contact_streams import load_frames
+from data.readers.recording_reader import load_npz
+from data.readers.table_reader import read_table_file
 from export.latency import record_costs
 from export.run_export import export_run
 from models import fitted_state
@@ -34,10 +33,11 @@ from models.nets.lstm_fcn import LSTMFCN
 from models.nets.prcnn import PRCNN
 from models.nets.rescnn import ResCNN
 from models.resmlp_regressor import ResMLPRegressor
-from models.runs.run import run
 from models.timeseries_classifier import TimeSeriesClassifier
 from models.trees import TreeRegressor
 from models.weighted_blend import ValidationWeightedBlend
+from runs.reference_tasks import generate
+from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,22 +1,23 @@
 """The capacitive skin scene (data/scenes/capacitive6x6.py): calibration against seed 001
 (limit of detection ~0.1 N, ~150 counts at 3 N, nearly linear), the 12 x 21 grid, the effects
-contract, the stream's ground truth, frames files (data/contact_streams.py), bad input and
+contract, the stream's ground truth, frames files (data/readers/contact_streams.py), bad input and
 hard cases."""
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings, strategies as st
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from omegaconf import OmegaConf
 
 import data.scenes.capacitive6x6 as capacitive
-from data.contact_sessions import SESSIONS
-from data.contact_streams import TRUTH_COLUMNS, ContactStream, load_frames, save_frames_csv
-from data.contact_windows import window_channel_names, window_indices, windows_around_peaks
-from data.errors import InputError
+from common.errors import InputError
+from data.preprocessing.contact_windows import window_channel_names, window_indices, windows_around_peaks
+from data.readers.contact_streams import TRUTH_COLUMNS, ContactStream, load_frames, save_frames_csv
 from data.scenes.capacitive6x6 import Capacitive6x6Scene, channel_names
 from data.scenes.capacitive6x6_effects import EFFECTS, FULL_SCALE_COUNTS
+from data.scenes.capacitive6x6_sessions import SESSIONS
 
 SCENES = Path(__file__).resolve().parents[1] / "configs" / "scene"
 FULL_EFFECTS = OmegaConf.to_container(OmegaConf.load(SCENES / "capacitive6x6.yaml").effects)
@@ -321,7 +322,7 @@ def test_saturation_and_every_cell_above_threshold():
 
 
 def test_a_run_with_an_impossible_scene_stops_before_writing_anything(compose_config, tmp_path):
-    from models.runs.run import run
+    from runs.run import run
     cfg = compose_config(["experiment=capacitive_force", "model=linear_regression", "scene.spacer_thickness_mm=0"])
     with pytest.raises(InputError, match="spacer_thickness_mm must be a positive number") as error:
         run(cfg, tmp_path)

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 from omegaconf import OmegaConf
 
-from data.errors import InputError
+from common.errors import InputError
 from data.scenes.fingertip import FingertipScene
 from data.scenes.fingertip_boards import TEXTURES
 

@@ -1,20 +1,23 @@
 """Physics checks on the rubber12 scene: the solve is real, symmetric where it must be,
 local where it must be, and reproducible."""
 import functools
+from pathlib import Path
 
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 
-from data.physics.contact_mechanics import (bonded_incompressible_layer_factor, bonded_layer_deflection_mm,
-                                            bonded_layer_stiffening, flat_punch_force_n, neo_hookean_stiffening)
-from data.errors import InputError
+from common.errors import InputError
+from data.physics.contact_mechanics import (
+    bonded_incompressible_layer_factor,
+    bonded_layer_deflection_mm,
+    bonded_layer_stiffening,
+    flat_punch_force_n,
+    neo_hookean_stiffening,
+)
 from data.scenes import rubber12, rubber12_effects
 from data.scenes.rubber12 import Rubber12Scene, electrode_positions_mm, measurement_pairs
 from data.scenes.rubber12_effects import FIELD_EFFECTS
-
-from pathlib import Path
-
-from omegaconf import OmegaConf
 
 PHYSICS = {"contact": {}, "percolation": {}}
 NOISY = {**PHYSICS, "temperature_drift": {}, "adc": {}}

@@ -7,10 +7,10 @@ from hydra.utils import instantiate
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.bonded_layer import base_field, base_traction_pa, layer_kernels
 from data.scenes.taxels import TaxelsScene
-from models.runs.taxel_receptive_field import fit_laws, profile_metrics
+from runs.studies.taxel_receptive_field import fit_laws, profile_metrics
 
 E_PA, FORCE_MN = 2.4e6, 10.0
 
@@ -306,7 +306,7 @@ def test_zero_force_reads_zero_and_readings_are_linear_in_force():
 
 
 def test_receptive_field_study_writes_its_figures(compose_config, tmp_path):
-    from models.runs.run import run
+    from runs.run import run
     cfg = compose_config(["experiment=taxel_receptive_field", "study.thickness_um=[150,300,600]",
                           "study.n_points=201", "~study.models.scene", "~study.models.half_space_real",
                           "~study.models.bonded_layer_real", "~study.models.bonded_layer",
@@ -325,7 +325,7 @@ def test_receptive_field_study_writes_its_figures(compose_config, tmp_path):
 @pytest.mark.slow  # ~12 s: a whole regression run (fit, report, figures)
 def test_inverse_runs_through_the_shared_regression_pipeline(compose_config, tmp_path):
     """experiment=taxel_inverse's single job (one cover, one thickness, one seed), tiny."""
-    from models.runs.run import run
+    from runs.run import run
     cfg = compose_config(["experiment=taxel_inverse", "scene=taxels_ridge", "scene.cover_thickness_um=580",
                           "scene.n_samples=300", "model.n_estimators=10"])
     metrics = run(cfg, tmp_path)

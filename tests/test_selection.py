@@ -4,12 +4,12 @@ import pytest
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.metrics import r2_score
 
-from data.errors import InputError
-from models.report.analysis import identifiability_map
+from common.errors import InputError
 from models.kfold_blend import KFoldBlend
-from models.weighted_blend import ValidationWeightedBlend, validation_weights
 from models.trees import TreeRegressor
 from models.uncertainty import conformal_quantile, coverage, normalised_scores
+from models.weighted_blend import ValidationWeightedBlend, validation_weights
+from runs.report.analysis import identifiability_map
 
 
 class Constant(BaseEstimator, RegressorMixin):
@@ -172,8 +172,8 @@ def test_fold_models_never_see_their_held_out_fold():
 
 
 def test_a_net_carves_its_early_stopping_rows_by_group():
+    from data.splits.indices import carve_validation
     from models.resmlp_regressor import ResMLPRegressor
-    from data.splits import carve_validation
     groups = np.repeat(np.arange(30), 4)
     fit_rows, val_rows = carve_validation(len(groups), 0.2, seed=3, groups=groups)
     assert not set(groups[fit_rows]) & set(groups[val_rows]) and len(val_rows) > 0

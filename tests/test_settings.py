@@ -1,4 +1,4 @@
-"""Settings are checked by type and range before anything heavy runs (data/config_checks.py), and
+"""Settings are checked by type and range before anything heavy runs (runs/config_checks.py), and
 a trainer setting reaches every net of a run, the blend's members included."""
 import logging
 import os
@@ -8,15 +8,15 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import CONFIG_DIR, tiny
 from hydra import compose, initialize_config_dir
 from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
 
-from conftest import CONFIG_DIR, tiny
-from data.config_checks import check_config
-from data.errors import InputError
+from common.errors import InputError
 from models.resmlp_regressor import ResMLPRegressor
-from models.runs.run import run
+from runs.config_checks import check_config
+from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 EXPERIMENTS = sorted(p.stem for p in (ROOT / "configs" / "experiment").glob("*.yaml"))
@@ -183,11 +183,11 @@ def test_the_run_logs_the_warning_of_its_own_overrides(tmp_path, caplog):
     overrides = tiny("decision_tree") + ["trainer.max_epochs=5", "analysis.ablation=false"]
     HydraConfig.instance().set_config(composed(overrides, hydra_config=True))
     try:
-        with caplog.at_level(logging.WARNING, logger="models.runs.run"):
+        with caplog.at_level(logging.WARNING, logger="runs.run"):
             run(composed(overrides), tmp_path)
     finally:
         HydraConfig.instance().cfg = None
-    assert [r.getMessage() for r in caplog.records if r.name == "models.runs.run"] == [
+    assert [r.getMessage() for r in caplog.records if r.name == "runs.run"] == [
         "trainer.max_epochs=5, trainer.progress=false: no part of this run reads them (model: TreeRegressor); ignored"]
 
 

@@ -7,11 +7,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from data.errors import InputError
+from common.errors import InputError
 from data.scenes.rubber12 import Rubber12Scene
-from models.timeseries_classifier import TimeSeriesClassifier
 from models.nets.prcnn import PRCNN
 from models.resmlp_regressor import ResMLPRegressor
+from models.timeseries_classifier import TimeSeriesClassifier
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -3,13 +3,13 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from data.errors import InputError
+from common.errors import InputError
+from data.datamodules.timeseries import TimeSeriesDataModule
 from data.physics.force_sensing_resistor import fsr_force_n
+from data.preprocessing.virtual_force_levels import virtual_force_levels
+from data.preprocessing.windows import cut_windows, decimate
+from data.readers.recording_reader import load_long_table, load_npz
 from data.scenes.fingertip import FingertipScene
-from data.recording_files import load_long_table, load_npz
-from data.timeseries_datamodule import TimeSeriesDataModule
-from data.virtual_force_levels import virtual_force_levels
-from data.windows import cut_windows, decimate
 
 
 def test_window_counts_trimming_and_variance_filter():
@@ -133,7 +133,7 @@ def test_bad_test_splits_are_one_line_errors(kwargs, message):
 
 
 def test_virtual_windows_come_from_training_recordings_only(monkeypatch):
-    import data.timeseries_datamodule as module
+    import data.datamodules.timeseries as module
     seen = {}
 
     def spy(windows, labels, levels, target_levels, **kwargs):
@@ -241,7 +241,7 @@ def test_algorithm_1_degenerate_cases_are_defined():
 
 
 def test_users_npz_trains_through_hydra(compose_config, tmp_path):
-    from models.runs.run import run
+    from runs.run import run
     rng = np.random.default_rng(0)
     t = np.arange(200) / 50.0
     X = np.stack([np.stack([np.sin(2 * np.pi * f * t) + 0.3 * rng.standard_normal(200),

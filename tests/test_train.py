@@ -10,15 +10,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 import pytest
+from conftest import tiny
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-from conftest import tiny
-from models.runs.run import run
+from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 CLASSIFIERS = {"prcnn", "rescnn", "inceptiontime", "lstm_fcn"}  # tested in test_tsc_models.py
 MODELS = sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml") if p.stem not in CLASSIFIERS)
-# data/atomic.py renders each output into tempfile.mkstemp(prefix=f".{name}.", suffix=suffix) in
+# common/atomic.py renders each output into tempfile.mkstemp(prefix=f".{name}.", suffix=suffix) in
 # the output's folder: ".metrics.json.k2x9_a1b.json", ".parity.png.q0w8r7t6.png". A hidden
 # name, then more name, a dot and more: what a crashed or forgotten atomic write leaves behind.
 ATOMIC_TEMP_GLOB = ".?*.?*"
@@ -35,7 +35,7 @@ def test_every_model_config_is_tested():
 @pytest.mark.parametrize("model", MODELS)
 def test_a_run_writes_every_output(compose_config, tmp_path, model):
     cfg = compose_config(tiny(model))
-    # The leftover check below must be able to fail: a temp name made by data/atomic.py's rule
+    # The leftover check below must be able to fail: a temp name made by common/atomic.py's rule
     # for each kind of output is caught by it.
     for name in ("metrics.json", "predictions.csv", "parity.png", "pipeline.npz"):
         target = tmp_path / name

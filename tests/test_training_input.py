@@ -15,9 +15,9 @@ import pytest
 from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 
-from data.errors import InputError
-from data.recording_files import load_long_table
-from data.tables import TableSource
+from common.errors import InputError
+from data.readers.recording_reader import load_long_table
+from data.sensor_table import TableSource
 from data.units import physical_range
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -272,7 +272,7 @@ def test_a_table_split_column_is_used_by_default(compose_config, tmp_path):
 
 # -- progress on large inputs -------------------------------------------------------------------
 def test_reading_a_table_says_so_at_once_and_counts_rows(tmp_path, caplog, monkeypatch):
-    import data.table_files as table_files
+    import data.readers.table_reader as table_files
     monkeypatch.setenv("CI", "true")  # log lines, as in a run's log, not a terminal bar
     monkeypatch.setattr(table_files, "CSV_CHUNK_ROWS", 7)  # several chunks
     press_table(n=40).to_csv(tmp_path / "rig.csv", index=False)

@@ -7,12 +7,12 @@ import pytest
 import torch
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
-from models.torch_runtime import count_parameters
 from models.nets.inceptiontime import InceptionTime
 from models.nets.lstm_fcn import LSTMFCN
 from models.nets.prcnn import PRCNN
 from models.nets.rescnn import ResCNN
-from models.runs.run import run
+from models.torch_runtime import count_parameters
+from runs.run import run
 
 
 def test_inceptiontime_has_the_papers_456074_parameters():

@@ -41,7 +41,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.special import j0, j1
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.elastic_half_space import check_material
 
 XI_MAX = 40.0       # in units of 1/h

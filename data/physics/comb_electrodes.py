@@ -16,7 +16,7 @@ band sits at v / Lambda in time.
 import numpy as np
 from scipy.signal import fftconvolve
 
-from data.errors import InputError
+from common.errors import InputError
 
 
 def comb_weights(step_mm: float, period_mm: float, length_mm: float) -> np.ndarray:

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from data.errors import InputError
+from common.errors import InputError
 
 DEFAULT_CORE_RADIUS_M = 1.0e-6
 

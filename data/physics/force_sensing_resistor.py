@@ -27,7 +27,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from data.errors import InputError
+from common.errors import InputError
 
 # The one table of the amplifier's and film's defaults: the scene, the calibration and the
 # exported graph all start from these.

@@ -36,7 +36,7 @@ from functools import lru_cache
 import numpy as np
 from scipy.special import erf
 
-from data.errors import InputError
+from common.errors import InputError
 
 ROLL_OFF_SPAN = 4.0     # q0 / q_L: the spectrum is flat over two octaves below the roll-off
 

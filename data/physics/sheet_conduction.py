@@ -24,7 +24,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from data.errors import InputError
+from common.errors import InputError
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ steady sliding, no stick-slip.
 """
 import numpy as np
 
-from data.errors import InputError
+from common.errors import InputError
 
 MIN_SLIP_MM = 1e-6
 

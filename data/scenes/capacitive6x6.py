@@ -39,11 +39,11 @@ Protocols:
   reading over the same frames), x_mm, y_mm of the press; groups = the repetition, so a
   grouped 70/30 split keeps whole repetitions apart. With `characterisation_channels: window`
   the channels are the 3 x 3 cells around each press's largest change instead
-  (data/contact_windows.py, the window the contact tracker reads a contact's force from) and
+  (data/preprocessing/contact_windows.py, the window the contact tracker reads a contact's force from) and
   the target is force_n alone.
 - `stream` (sec. 3.3): `n_rest_frames` frames without contact (the tracker's calibration),
   then sessions of 1-5 contacts that tap, hold, glide, cross, merge and split
-  (data/contact_streams.py), each followed by a gap. `stream()` returns a ContactStream with
+  (data/readers/contact_streams.py), each followed by a gap. `stream()` returns a ContactStream with
   the raw frames and the ground truth per frame and contact.
 """
 from functools import lru_cache
@@ -51,14 +51,14 @@ from functools import lru_cache
 import numpy as np
 import pandas as pd
 
-from data.contact_sessions import SESSIONS, Choreography, choreograph
-from data.contact_windows import window_channel_names, windows_around_peaks
-from data.contact_streams import ContactStream, check_grid
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.elastic_half_space import disc_quadrature, vertical_stress_pa
+from data.preprocessing.contact_windows import window_channel_names, windows_around_peaks
+from data.readers.contact_streams import ContactStream, check_grid
 from data.scenes.capacitive6x6_effects import EFFECTS, MATERIAL_EFFECTS, READING_EFFECTS
+from data.scenes.capacitive6x6_sessions import SESSIONS, Choreography, choreograph
 from data.scenes.contract import random_generator_for, resolve_effects
-from data.tables import SensorTable
+from data.sensor_table import SensorTable
 
 EPSILON_0_F_PER_M = 8.8541878128e-12
 TARGETS = ["force_n", "x_mm", "y_mm"]

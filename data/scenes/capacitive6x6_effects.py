@@ -22,7 +22,7 @@ effect draws it once, under its own name, and the generator `rng` carries on bet
 import numpy as np
 from scipy.signal import lfilter
 
-from data.errors import InputError
+from common.errors import InputError
 
 FULL_SCALE_COUNTS = 2**16 - 1   # the FT5316 reports 16-bit raw values (seed 001 sec. 2.3)
 

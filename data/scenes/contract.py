@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 
 import numpy as np
 
-from data.errors import InputError
+from common.errors import InputError
 
 
 def random_generator_for(seed: int, name: str) -> np.random.Generator:

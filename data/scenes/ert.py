@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import ndtr
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.sheet_conduction import (
     PatchUpdateSolver,
     SheetGrid,
@@ -52,7 +52,7 @@ from data.scenes.ert_effects import (
     READING_EFFECTS,
     SENSOR_EFFECTS,
 )
-from data.tables import SensorTable
+from data.sensor_table import SensorTable
 
 TARGETS = ["x_mm", "y_mm", "force_n"]
 PROTOCOLS = ("single_point", "calibration", "two_point", "random", "blank")

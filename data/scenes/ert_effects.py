@@ -14,7 +14,7 @@ generator `rng` (data/scenes/contract.py).
 """
 import numpy as np
 
-from data.errors import InputError
+from common.errors import InputError
 
 
 def _fail(effect, message):

@@ -50,7 +50,7 @@ import numpy as np
 import pandas as pd
 from scipy.special import erf
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.force_sensing_resistor import (
     AMPLIFIER_DEFAULTS,
     FILM_DEFAULTS,
@@ -62,7 +62,7 @@ from data.physics.rough_contact import (
     real_contact_fraction,
     rms_slope,
 )
-from data.recordings import RecordingSet
+from data.recording_set import RecordingSet
 from data.scenes.contract import random_generator_for, resolve_effects
 from data.scenes.fingertip_boards import (
     material_table,

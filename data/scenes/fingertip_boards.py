@@ -36,7 +36,7 @@ Materials (MATERIALS), each against the fingertip's Kapton (polyimide) skin:
 """
 import numpy as np
 
-from data.errors import InputError
+from common.errors import InputError
 
 PERIODS_MM = (4, 5, 6, 7)
 PROFILES = ("circular", "triangular", "trapezoidal")

@@ -9,7 +9,7 @@ draws from its own random stream `rng`.
 import numpy as np
 from scipy.signal import lfilter
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.comb_electrodes import comb_differential
 from data.physics.rough_contact import surface_profile
 from data.physics.stick_slip import slip_length_mm, stick_slip_cycle

@@ -25,13 +25,13 @@ from functools import lru_cache
 
 import numpy as np
 import pandas as pd
-from data.progress import progress
 
+from common.errors import InputError
+from common.progress import progress
 from data.physics.sheet_conduction import NearFarSolver, PatchUpdateSolver, SheetGrid, SheetSolver, pair_resistance_ohm
 from data.scenes.contract import random_generator_for, resolve_effects
-from data.errors import InputError
 from data.scenes.rubber12_effects import EFFECTS, FIELD_EFFECTS, READING_EFFECTS
-from data.tables import SensorTable
+from data.sensor_table import SensorTable
 
 TARGETS = ["x_mm", "y_mm", "depth_mm", "pressure_pa"]
 

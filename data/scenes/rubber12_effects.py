@@ -8,10 +8,15 @@ parameter is a keyword with its unit in its name.
 """
 import numpy as np
 
-from data.physics.contact_mechanics import (bonded_layer_deflection_mm, flat_punch_force_n, mean_pressure_pa,
-                                           neo_hookean_stiffening, standard_linear_solid_relaxation)
-from data.errors import InputError
-from data.minmax_scaling import MinMaxScaling
+from common.errors import InputError
+from data.physics.contact_mechanics import (
+    bonded_layer_deflection_mm,
+    flat_punch_force_n,
+    mean_pressure_pa,
+    neo_hookean_stiffening,
+    standard_linear_solid_relaxation,
+)
+from data.preprocessing.minmax_scaling import MinMaxScaling
 
 
 def _needs(state, key, effect, provider):
@@ -327,7 +332,7 @@ def minmax_normalize(state, rng):
     unitless in [0, 1] (channel names change from r_XX_ohm to r_XX_norm). A channel that never
     changes maps to 0. The per-channel minimum and span are kept (`state["normalisation"]`, then
     the SensorTable's `normalisation`): a model trained on these channels applies them to raw
-    ohms when deployed (data/minmax_scaling.py)."""
+    ohms when deployed (data/preprocessing/minmax_scaling.py)."""
     scaling = MinMaxScaling.fit(state["resistance_ohm"], state["channels"])
     state["resistance_ohm"] = scaling.normalise(state["resistance_ohm"])
     state["channels"] = [name.removesuffix("_ohm") + "_norm" for name in state["channels"]]

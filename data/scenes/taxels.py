@@ -29,10 +29,10 @@ gamma_y_t<k>, eps_z_t<k>), which studies compare with eq. (1).
 import numpy as np
 import pandas as pd
 
-from data.errors import InputError
+from common.errors import InputError
 from data.scenes.contract import random_generator_for, resolve_effects
 from data.scenes.taxels_effects import COVER_EFFECTS, EFFECTS, LOAD_EFFECTS, READING_EFFECTS
-from data.tables import SensorTable
+from data.sensor_table import SensorTable
 
 TARGETS = ["x_mm", "y_mm", "normal_n", "shear_x_n", "shear_y_n"]
 BRIDGES = ("left", "right", "down", "up")

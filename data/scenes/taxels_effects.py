@@ -18,7 +18,7 @@ holds literally at nu = 0.5.
 """
 import numpy as np
 
-from data.errors import InputError
+from common.errors import InputError
 from data.physics.bonded_layer import base_field
 from data.physics.elastic_half_space import disc_quadrature, point_load_strain
 

@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from data.errors import InputError
+from common.errors import InputError
 
 THRESHOLDS = ("std", "variance")
 

@@ -13,7 +13,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from data.features import enabled_groups
+from data.preprocessing.features import enabled_groups
 from models.classic_regressors import ClassicRegressor
 from models.deployable import RegressionPipeline
 

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from data.contact_windows import OFFSETS, window_indices
+from data.preprocessing.contact_windows import OFFSETS, window_indices
 
 DIAGONAL = [i for i, (dr, dc) in enumerate(OFFSETS) if dr and dc]                 # window positions 0, 2, 6, 8
 PLUS = [i for i, (dr, dc) in enumerate(OFFSETS) if not (dr and dc)]               # the cell and its row and column neighbours
@@ -26,7 +26,7 @@ class Grid:
     n_cells: int
     cell_xy_mm: np.ndarray     # (cells, 2): centre of cell (r, c) at ((c + 1/2) pitch, (r + 1/2) pitch)
     neighbourhood: np.ndarray  # (9, cells): the 3 x 3 cells around each cell, clipped at the edges (a repeat changes no maximum)
-    window: np.ndarray         # (cells, 9): the 3 x 3 window, padded (data/contact_windows.py: the force model's too)
+    window: np.ndarray         # (cells, 9): the 3 x 3 window, padded (data/preprocessing/contact_windows.py: the force model's too)
     plus: np.ndarray           # (cells, 5): the cell and its row and column neighbours, padded: the climb to peaks
     plus_starts: np.ndarray    # where each row of a (k, 5) gather starts in its flat view
     diagonal: np.ndarray       # (cells, 4): the diagonal neighbours, padded

@@ -14,7 +14,7 @@ import math
 import numpy as np
 from sklearn.base import BaseEstimator
 
-from data.errors import InputError
+from common.errors import InputError
 from models.contact_tracking.baseline import THRESHOLDS, above_threshold, fit_baseline, follow_drift
 from models.contact_tracking.detection import Detections, describe, segment
 from models.contact_tracking.frame_contacts import FrameContacts
@@ -51,7 +51,7 @@ class ContactTracker(BaseEstimator):
       largest cell, as the characterisation presses at a cell centre; "sum", "mean"; "window":
       the 3 x 3 loads around the peak, not thresholded, 0 outside the grid and on another
       contact's cells: the scene's `characterisation_channels: window` rows,
-      data/contact_windows.py, so a model fitted on those presses serves); follow_drift: every
+      data/preprocessing/contact_windows.py, so a model fitted on those presses serves); follow_drift: every
       frame, move the rest mean of each cell below threshold towards its reading by drift_rate.
 
     Learned: baseline_ (mean_, variance_, spread_, threshold_ read from it), grid_, tracks_

@@ -11,7 +11,7 @@ How it trains lives in models/resmlp_regressor.py.
 import torch
 from torch import nn
 
-from data.errors import InputError
+from common.errors import InputError
 
 
 class GaussianNoise(nn.Module):

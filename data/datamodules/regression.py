@@ -1,0 +1,153 @@
+"""One datamodule for torch nets and scikit-learn trees alike.
+
+    source (a scene or a user's table) -> SensorTable -> physics features -> splits -> scaling
+
+A held-out test split (15 % by default) is never touched in training or selection; an
+optional calibration split (for conformal intervals) and a validation split come out of the
+rest. A table that declares its rows' sides (a `split` column) is split that way by default
+(`split=auto`; `declared_split=ignore` draws instead, data/splits/indices.py: resolve_split); calibration
+and (when no val rows are declared) validation are then carved from the train rows, grouped
+(predefined_split). Without a declared split, `auto` draws `grouped`.
+The table's values were checked when it was built (data/sensor_table.py); the features every model
+is given are checked here to be finite in float32, naming the feature.
+Features are standardised with statistics from the training split only. Targets stay in
+physical units here: a net standardises its own targets inside `fit` and reports back in
+units, so every model sees and returns the same arrays.
+"""
+import logging
+
+import numpy as np
+from sklearn.preprocessing import StandardScaler
+
+from common.errors import InputError
+from common.progress import phase
+from data.preprocessing.features import compute_features, feature_names
+from data.readers.table_reader import MODEL_DTYPE, where
+from data.sensor_table import SensorTable, TableSource
+from data.splits.indices import SPLIT_NOTES, holdout, predefined_split, resolve_split
+from data.splits.settings import check_split_settings
+
+log = logging.getLogger("touchstone")
+DRAWN_SPLIT = "grouped"      # what split=auto draws when the table declares no split
+LARGE_TABLE_ROWS = 100_000   # from here on the features take seconds: their phase is logged
+
+
+class RegressionDataModule:
+    def __init__(self, source, features, split="auto", test_fraction=0.15, val_fraction=0.15,
+                 calibration_fraction=0.0, n_folds=5, seed=0, declared_split="use"):
+        self.source = source
+        self.features = features
+        self.split = split   # as asked; setup() replaces auto with the split it used
+        self.declared_split = declared_split
+        self.test_fraction = test_fraction
+        self.val_fraction = val_fraction
+        self.calibration_fraction = calibration_fraction
+        self.n_folds = n_folds
+        self.seed = seed
+
+    def setup(self) -> "RegressionDataModule":
+        check_split_settings(self.n_folds, self.test_fraction, self.val_fraction, self.calibration_fraction,
+                             self.split)
+        table = self.source.load()
+        if not isinstance(table, SensorTable):
+            name = getattr(self.source, "name", type(self.source).__name__)
+            kind = type(table).__name__
+            raise InputError(f"scene {name} produces a {kind}, not one row per press; for recordings use "
+                             "data=timeseries (experiment=materials10, textures13, combined18), for a contact "
+                             "stream experiment=capacitive_tracking")
+        self.table = table
+        self.channel_names = list(table.channel_columns)
+        self.target_names = list(table.target_columns)
+        self.feature_names = feature_names(self.channel_names, self.features)
+        self.y = table.targets
+
+        self.split, self.split_source = resolve_split(self.split, table.split is not None, self.declared_split,
+                                                      DRAWN_SPLIT, table.source_name)
+        check_split_settings(self.n_folds, self.test_fraction, self.val_fraction, self.calibration_fraction,
+                             self.split)
+        if self.split == "predefined":
+            self._predefined_split(table)
+        else:
+            self._drawn_split(table)
+        log.info("data split: %s; %d train, %d validation, %d calibration, %d test rows", self.split_source,
+                 self.train_idx.size, self.val_idx.size, self.cal_idx.size, self.test_idx.size)
+        with phase(f"features of {len(self.y):,} rows", enabled=len(self.y) >= LARGE_TABLE_ROWS):
+            self.X, self.scaler = self.features_for(self.features)
+        return self
+
+    def _predefined_split(self, table: SensorTable) -> None:
+        """The table's declared sides; calibration is carved from its train rows, grouped."""
+        where = table.description.get("path", table.description.get("scene", "the table"))
+        train, self.val_idx, self.test_idx = predefined_split(table.split, self.val_fraction, self.seed + 1,
+                                                              str(where), groups=table.groups)
+        self.cal_idx = np.array([], dtype=np.int64)
+        if self.calibration_fraction > 0:
+            train, self.cal_idx = holdout(train, table.groups, self.calibration_fraction, "grouped", self.seed + 2)
+        self.train_idx = train
+
+    def _drawn_split(self, table: SensorTable) -> None:
+        everything = np.arange(len(self.y))
+        rest, self.test_idx = holdout(everything, table.groups, self.test_fraction, self.split, self.seed)
+        # Calibration and validation are fractions of the whole set, taken from what is left.
+        left = 1.0 - self.test_fraction
+        self.cal_idx = np.array([], dtype=np.int64)
+        if self.calibration_fraction > 0:
+            rest, self.cal_idx = holdout(rest, table.groups, self.calibration_fraction / left, self.split, self.seed + 2)
+            left -= self.calibration_fraction
+        self.train_idx, self.val_idx = holdout(rest, table.groups, self.val_fraction / left, self.split, self.seed + 1)
+
+    def features_for(self, groups):
+        """Scaled features of every row for a choice of feature groups (used by the ablation):
+        the scaler is fitted on the training rows only."""
+        features = compute_features(self.table.channels, groups)
+        finite = np.isfinite(features).all(axis=1)
+        if not finite.all():  # readings like 1e308: finite, but their products and powers are not
+            row = int(np.argmin(finite))
+            path = self.table.description.get("path")
+            place = f"{path}: {where(path, row)}" if path else f"row {row + 1}"
+            raise InputError(f"{place}: channel readings {self.table.channels[row].tolist()} overflow the physics "
+                             "features (products and powers of readings beyond float64's range)")
+        scaler = StandardScaler().fit(features[self.train_idx])
+        scaled = scaler.transform(features)
+        with np.errstate(over="ignore"):
+            bad = ~np.isfinite(scaled.astype(MODEL_DTYPE))
+        if bad.any():  # what the models are given, in the dtype they compute in
+            row, column = np.unravel_index(int(np.flatnonzero(bad)[0]), bad.shape)
+            name = feature_names(self.channel_names, groups)[column]
+            raise InputError(f"{self.table.source_name}: feature '{name}' of {where(self.table.source_name, row)} is "
+                             f"{features[row, column]:g}, not finite in float32 once standardised; rescale its channels")
+        return scaled, scaler
+
+    def _part(self, idx):
+        return self.X[idx], self.y[idx]
+
+    @property
+    def train(self):
+        return self._part(self.train_idx)
+
+    @property
+    def val(self):
+        return self._part(self.val_idx)
+
+    @property
+    def test(self):
+        return self._part(self.test_idx)
+
+    @property
+    def calibration(self):
+        """The calibration split, or the validation split when none was asked for."""
+        return self._part(self.cal_idx if self.cal_idx.size else self.val_idx)
+
+    def summary(self) -> dict:
+        return {"split": self.split, "split_note": SPLIT_NOTES.get(self.split, ""), "split_source": self.split_source,
+                "n_train": int(self.train_idx.size), "n_val": int(self.val_idx.size),
+                "n_calibration": int(self.cal_idx.size), "n_test": int(self.test_idx.size), "n_features": len(self.feature_names),
+                "channels": self.channel_names, "targets": self.target_names,
+                "source": self.table.description}
+
+
+def from_table(path, channel_columns, target_columns, group_columns=None, split_column="split",
+               **datamodule_options):
+    """`data=table`: a user's CSV/Parquet recording served by the same datamodule as a scene."""
+    source = TableSource(path, channel_columns, target_columns, group_columns, split_column)
+    return RegressionDataModule(source, **datamodule_options)

@@ -1,0 +1,164 @@
+"""One regression run, top to bottom: fit, predict, intervals, analysis -> one result; then the
+report side (runs/report/regression_report.py) writes it once: metrics, figures, TensorBoard
+and files.
+"""
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+from hydra.utils import instantiate
+from omegaconf import DictConfig, OmegaConf
+
+from models.deployable import RegressionPipeline, regression_pipeline
+from runs.report.analysis import edge_vs_centre, feature_ablation, identifiability_map, interval_report
+from runs.report.metrics import regression_metrics
+from runs.report.regression_report import write_regression_report
+
+SHEET_TARGETS = {"x_mm", "y_mm", "depth_mm", "pressure_pa"}
+
+
+@dataclass
+class RegressionResult:
+    """Everything a run computed; the report side only formats and writes it."""
+    metrics: dict
+    targets: list[str]
+    test_rows: np.ndarray
+    y_test: np.ndarray
+    pred_test: np.ndarray
+    pipeline: RegressionPipeline
+    interval: tuple | None = None               # (mean, lower, upper) calibrated, on test
+    importances: tuple | None = None            # (candidate name, values) of a tree model
+    correlation: tuple | None = None            # (matrix, labels): targets and top features
+    hparams: dict = field(default_factory=dict)
+
+
+def _model_size(model) -> dict:
+    for attribute in ("n_parameters_", "n_nodes_"):
+        if hasattr(model, attribute):
+            return {attribute.rstrip("_"): int(getattr(model, attribute))}
+    return {}
+
+
+def _selection_report(model, targets) -> dict:
+    report = {"candidates": model.names_, "weights_rule": model.weights, "mode": model.mode,
+              "per_target": model.per_target,
+              "selected": model.selected_(),
+              "weights": {n: dict(zip(targets, map(float, model.weights_[i]))) for i, n in enumerate(model.names_)},
+              "val_r2": {n: dict(zip(targets, map(float, model.val_r2_[i]))) for i, n in enumerate(model.names_)},
+              "fallback_targets": [targets[k] for k in model.fallback_targets_],
+              # stacking: targets where the stacked blend scored below its best candidate on
+              # validation, so that candidate alone serves the target
+              "stacking_fallback_targets": [targets[k] for k in model.stacking_fallback_targets_],
+              "fit_time_s": model.fit_time_s_}
+    folds = {n: m.fold_fit_time_s_ for n, m in model.models_.items() if hasattr(m, "fold_fit_time_s_")}
+    if folds:
+        report["fold_fit_time_s"] = folds
+    return report
+
+
+def _fold_costs(model) -> dict:
+    """Fit wall and CPU time of every fold model of a (weighted) K-fold blend."""
+    blends = model.models_ if hasattr(model, "weights_") else {"model": model}
+    folds = {n: {"fit_time_s": m.fold_fit_time_s_, "fit_cpu_time_s": m.fold_fit_cpu_time_s_}
+             for n, m in blends.items() if hasattr(m, "fold_fit_time_s_")}
+    return {"folds": folds} if folds else {}
+
+
+def _fold_warnings(model) -> list[str]:
+    blends = model.models_.values() if hasattr(model, "weights_") else [model]
+    return sorted({m.fold_warning_ for m in blends if getattr(m, "fold_warning_", None)})
+
+
+def _importances(model):
+    if hasattr(model, "selected_tree_importances"):
+        return model.selected_tree_importances()
+    if hasattr(model, "feature_importances"):
+        values = model.feature_importances()
+        return None if values is None else (type(model).__name__, values)
+    return None
+
+
+def _ablation_estimator(model, cfg):
+    """The selected candidate, unblended, so the ablation costs one fit per feature group."""
+    if hasattr(model, "selected_"):
+        name = model.selected_()
+        candidate = cfg.model.candidates[name]
+        return name, instantiate(candidate.get("estimator", candidate))
+    return type(model).__name__, instantiate(cfg.model)
+
+
+def _hparams(cfg: DictConfig) -> dict:
+    """The choices that distinguish runs, flattened for TensorBoard's HPARAMS tab."""
+    flat = {"seed": cfg.seed, "data.split": cfg.data.get("split")}
+    model = OmegaConf.to_container(cfg.model, resolve=True)
+    flat.update({f"model.{k}": v for k, v in model.items() if not k.startswith("_")})
+    flat["model"] = model["_target_"].rsplit(".", 1)[-1]
+    if "scene" in cfg and cfg.data.get("source") is not None:
+        flat.update({f"scene.{k}": cfg.scene[k] for k in ("n_samples", "protocol") if k in cfg.scene})
+    return flat
+
+
+def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> RegressionResult:
+    analysis = cfg.get("analysis", {})
+    (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
+    targets = datamodule.target_names
+    model = instantiate(cfg.model)
+    groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split in ("grouped", "predefined") else None
+
+    start, cpu_start = time.perf_counter(), time.process_time()
+    model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
+    fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
+
+    pred_test = model.predict(X_test)
+    metrics = {
+        "model": model.__class__.__name__,
+        "val": regression_metrics(y_val, model.predict(X_val), targets),
+        "test": regression_metrics(y_test, pred_test, targets),
+        "fit_time_s": fit_time_s,
+        **_model_size(model),
+        "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, **_model_size(model),
+                 **_fold_costs(model)},
+        "data": datamodule.summary(),
+    }
+    warnings = _fold_warnings(model)
+    if warnings:
+        metrics["warnings"] = warnings
+    result = RegressionResult(metrics, targets, datamodule.test_idx, y_test, pred_test,
+                              regression_pipeline(datamodule, model), hparams=_hparams(cfg))
+
+    if hasattr(model, "weights_"):
+        metrics["selection"] = _selection_report(model, targets)
+    if hasattr(model, "predict_std"):
+        model.calibrate(*datamodule.calibration)
+        metrics["uncertainty"], mean, sigma = interval_report(model, X_test, y_test, targets)
+        result.interval = model.predict_interval(X_test, calibrated=True)
+        if SHEET_TARGETS <= set(targets):
+            xy = y_test[:, [targets.index("x_mm"), targets.index("y_mm")]]
+            ident = identifiability_map(xy, y_test[:, targets.index("depth_mm")], sigma, np.abs(y_test - mean),
+                                        targets, bins=analysis.get("identifiability_bins", 5))
+            position_sigma = np.hypot(sigma[:, targets.index("x_mm")], sigma[:, targets.index("y_mm")])
+            ident["position_sigma_edge_vs_centre_mm"] = edge_vs_centre(xy, position_sigma)
+            metrics["identifiability"] = ident
+
+    result.importances = _importances(model)
+    if result.importances is not None:
+        values = result.importances[1]
+        top = np.argsort(values)[::-1][:10]
+        table = np.column_stack([datamodule.y[datamodule.train_idx], datamodule.X[datamodule.train_idx][:, top]])
+        result.correlation = (np.nan_to_num(np.corrcoef(table, rowvar=False)),
+                              targets + [datamodule.feature_names[i] for i in top])
+        metrics["top_features"] = {datamodule.feature_names[i]: float(values[i]) for i in top}
+
+    if analysis.get("ablation", False):
+        name, estimator = _ablation_estimator(model, cfg)
+        metrics["ablation"] = {"model": name, **feature_ablation(estimator, datamodule,
+                                                                    progress=analysis.get("progress", True))}
+    return result
+
+
+def run_regression(cfg: DictConfig, output_dir: str | Path, datamodule) -> dict:
+    with instantiate(cfg.logger, log_dir=str(Path(output_dir) / "tensorboard")) as logger:
+        result = fit_and_evaluate(cfg, datamodule, logger.log_epoch)
+        write_regression_report(result, output_dir, logger, datamodule.feature_names)
+    return result.metrics

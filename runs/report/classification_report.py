@@ -1,0 +1,65 @@
+"""The report of a classification run: confusion matrices for validation and test (PNG and
+TensorBoard), final scalars and hyper-parameters, predictions.csv (with class probabilities),
+pipeline.npz, metrics.json and the log line. Validation is what runs are chosen on; test, never used for choosing, is reported
+beside it so the number a reader quotes is an honest one."""
+import logging
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from common.atomic import atomic_write, atomic_write_json
+from models.deployable import PIPELINE_FILE, save_pipeline
+from runs.report import plots
+
+log = logging.getLogger(__name__)
+
+SPLIT_NAMES = {"val": "validation", "test": "test"}
+FIGURE_FILES = {"val": "confusion.png", "test": "confusion_test.png"}  # confusion.png keeps its old name
+
+
+def _split_frame(classes, split, recording, y_true, proba, levels) -> pd.DataFrame:
+    """One row per window: its recording, true and predicted class names and one probability
+    column per class (`p_<class>`), so a user can rank, threshold or calibrate without re-running."""
+    frame = pd.DataFrame({"split": split, "recording": recording, "true": classes[y_true],
+                          "predicted": classes[proba.argmax(axis=1)]})
+    if levels is not None:
+        frame["force_level_n"] = levels
+    for k, name in enumerate(classes):
+        frame[f"p_{name}"] = proba[:, k]
+    return frame
+
+
+def write_classification_report(result, output_dir, logger) -> None:
+    output_dir = Path(output_dir)
+    metrics = result.metrics
+    figures = {}
+    for split in ("val", "test"):
+        scores = metrics[split]
+        figures[split] = plots.confusion_figure(np.asarray(scores["confusion_matrix"]), result.classes,
+                                                f"{metrics['model']}: {SPLIT_NAMES[split]} accuracy {scores['accuracy']:.3f}")
+        logger.log_figure(f"confusion/{split}", figures[split])
+        for name in ("accuracy", "macro_f1", "loss"):
+            logger.writer_.add_scalar(f"final/{split}_{name}", scores[name])
+    logger.writer_.add_scalar("cost/fit_time_s", metrics["fit_time_s"])
+    logger.log_hparams(result.hparams, {"hparam/val_accuracy": metrics["val"]["accuracy"],
+                                        "hparam/test_accuracy": metrics["test"]["accuracy"],
+                                        "hparam/fit_time_s": metrics["fit_time_s"]})
+
+    classes = np.asarray(result.classes)
+    frame = pd.concat([
+        _split_frame(classes, "val", result.val_window_recording, result.y_val, result.proba_val, result.val_levels),
+        _split_frame(classes, "test", result.test_window_recording, result.y_test, result.proba_test, result.test_levels),
+    ], ignore_index=True)
+    atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
+    for split, figure in figures.items():
+        atomic_write(output_dir / FIGURE_FILES[split], lambda tmp, fig=figure: fig.savefig(tmp, dpi=110, format="png"))
+        plots.plt.close(figure)
+    save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
+    atomic_write_json(output_dir / "metrics.json", metrics)
+    val, test = metrics["val"], metrics["test"]
+    log.info("%s (%d parameters) fitted in %.1f s: validation accuracy %.4f (macro-F1 %.4f, loss %.4f, by level %s); "
+             "test accuracy %.4f (macro-F1 %.4f, loss %.4f, by level %s)",
+             metrics["model"], metrics["n_parameters"], metrics["fit_time_s"], val["accuracy"], val["macro_f1"],
+             val["loss"], val.get("accuracy_by_force_level_n"), test["accuracy"], test["macro_f1"], test["loss"],
+             test.get("accuracy_by_force_level_n"))

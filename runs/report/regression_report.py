@@ -1,0 +1,95 @@
+"""The report of a regression run: one call turns a RegressionResult into figures, TensorBoard
+scalars and hyper-parameters, predictions.csv, pipeline.npz, metrics.json and log lines.
+
+Nothing here fits or predicts: runs/regression.py computed everything.
+"""
+import logging
+from pathlib import Path
+
+import pandas as pd
+
+from common.atomic import atomic_write, atomic_write_json
+from models.deployable import PIPELINE_FILE, save_pipeline
+from runs.report import plots
+from runs.report.analysis import format_ablation
+from runs.report.metrics import format_table
+
+log = logging.getLogger(__name__)
+
+
+def regression_figures(result, feature_names) -> dict:
+    targets, y, pred = result.targets, result.y_test, result.pred_test
+    figures = {"parity": plots.parity_figure(y, pred, targets, {t: result.metrics["test"][t]["r2"] for t in targets}),
+               "residuals": plots.residual_figure(y, pred, targets)}
+    if result.interval is not None:
+        figures["uncertainty"] = plots.uncertainty_figure(y, *result.interval, targets)
+    if "identifiability" in result.metrics:
+        figures["identifiability"] = plots.identifiability_figure(result.metrics["identifiability"])
+    if result.importances is not None:
+        name, values = result.importances
+        figures["importances"] = plots.importance_figure(feature_names, values, f"feature importances: {name} (top 20)")
+        figures["correlation"] = plots.correlation_figure(*result.correlation)
+    return figures
+
+
+def _log_to_tensorboard(logger, result, figures) -> None:
+    metrics = result.metrics
+    logger.log_metrics(metrics["val"], "val")
+    logger.log_metrics(metrics["test"], "test")
+    logger.writer_.add_scalar("cost/fit_time_s", metrics["fit_time_s"])
+    for split, values in (metrics.get("uncertainty") or {}).items():
+        if split.startswith("coverage_"):
+            for target, value in values.items():
+                logger.writer_.add_scalar(f"uncertainty/{split}/{target}", value)
+    for name, figure in figures.items():
+        logger.log_figure(f"{name}/test", figure)
+    logger.log_hparams(result.hparams, {"hparam/val_r2": metrics["val"]["average"]["r2"],
+                                        "hparam/test_r2": metrics["test"]["average"]["r2"],
+                                        "hparam/fit_time_s": metrics["fit_time_s"]})
+
+
+def _predictions_frame(result) -> pd.DataFrame:
+    """One row per test press: the raw readings the deployed model takes (so the file is a
+    ready input for predict.py), then each target's prediction under the same column names that
+    predict.py writes (x_mm, x_mm_lower95, x_mm_upper95), then the truth (true_x_mm)."""
+    targets, pipeline = result.targets, result.pipeline
+    frame = pd.DataFrame(pipeline.examples, columns=pipeline.channel_names)
+    frame.insert(0, "row", result.test_rows)
+    for k, t in enumerate(targets):
+        frame[t] = result.pred_test[:, k]
+        if result.interval is not None:
+            frame[f"{t}_lower95"], frame[f"{t}_upper95"] = result.interval[1][:, k], result.interval[2][:, k]
+    for k, t in enumerate(targets):
+        frame[f"true_{t}"] = result.y_test[:, k]
+    return frame
+
+
+def _log_summary(metrics, output_dir) -> None:
+    log.info("%s fitted in %.2f s\n%s", metrics["model"], metrics["fit_time_s"], format_table(metrics))
+    for warning in metrics.get("warnings", []):
+        log.warning(warning)
+    if "selection" in metrics:
+        log.info("blend weights (per target): %s",
+                 {n: {t: round(w, 3) for t, w in row.items()} for n, row in metrics["selection"]["weights"].items()})
+    if "uncertainty" in metrics:
+        u = metrics["uncertainty"]
+        log.info("95 %% interval coverage on test, raw -> calibrated: %s",
+                 {t: f"{u['coverage_raw'][t]:.3f} -> {u['coverage_calibrated'][t]:.3f}" for t in u["coverage_raw"]})
+        log.info("Spearman(sigma, |error|): %s", {t: round(v, 3) for t, v in u["spearman_sigma_vs_abs_error"].items()})
+    if "ablation" in metrics:
+        log.info("feature-group ablation (%s), change in test R2:\n%s", metrics["ablation"]["model"],
+                 format_ablation(metrics["ablation"]))
+
+
+def write_regression_report(result, output_dir, logger, feature_names) -> None:
+    output_dir = Path(output_dir)
+    figures = regression_figures(result, feature_names)
+    _log_to_tensorboard(logger, result, figures)
+    frame = _predictions_frame(result)
+    atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
+    for name, figure in figures.items():
+        atomic_write(output_dir / f"{name}.png", lambda tmp, f=figure: f.savefig(tmp, dpi=110, format="png"))
+        plots.plt.close(figure)
+    save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
+    atomic_write_json(output_dir / "metrics.json", result.metrics)
+    _log_summary(result.metrics, output_dir)

@@ -1,0 +1,227 @@
+"""Study runs for the ERT skin (seed 002 §5): the paper's three tests, on the scene in `cfg.scene`.
+
+    python train.py experiment=ert_localisation scene=ert_internal      (and scene=ert_boundary)
+    python train.py experiment=ert_force scene=ert_internal
+    python train.py experiment=ert_two_point scene=ert_internal
+
+Each seed in `seeds` is one simulated sensor (its specimen variation and electrode errors) with
+its own noise: a calibration recording (protocol `calibration`) fits the Tikhonov reconstruction
+(models/tikhonov_reconstruction.py, alpha chosen on a validation split of the calibration), and
+separate recordings test it. Results are mean +- sd over presses per seed, then over seeds.
+
+Limit of quantification: 10 x the sd of the force estimated on blank frames (nothing pressed;
+IUPAC, Currie, Anal. Chem. 40, 1968), divided by the indenter's area for a pressure. The paper's
+supplementary procedure is not given.
+
+Two-point test (the paper's supplement is not given, so this is ours): over `n_repeats` noisy
+presses of the same two indenters, the reconstructed pressure at the two contact points (their
+mean) is compared with the pressure at the mid-point; one-sided paired t-test (H1: the profile
+dips between the contacts). The discrimination distance is the smallest distance from which
+every larger distance is significant at `significance`.
+"""
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pandas as pd
+from hydra.utils import instantiate
+from omegaconf import DictConfig, ListConfig, OmegaConf
+from scipy import stats
+
+from common.atomic import atomic_write, atomic_write_json, atomic_write_text
+from models.tikhonov_reconstruction import TikhonovReconstruction
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+
+PAPER = {
+    "ert_internal": {"localisation_mm": [8.13, 4.32], "force_error_n": [2.00, 1.18], "force_r": 0.983,
+                     "loq_kpa": [49.38, 20.25], "two_point_mm": "35 (edge) - 55 (centre)"},
+    "ert_boundary": {"localisation_mm": [23.72, 11.54], "force_error_n": [3.34, 1.88], "force_r": 0.929,
+                     "loq_kpa": [48.36, 48.75], "two_point_mm": "45 (edge), > 60 elsewhere"},
+}
+
+
+def _plain(node):
+    return OmegaConf.to_container(node, resolve=True) if isinstance(node, (DictConfig, ListConfig)) else node
+
+
+def scene_for(cfg, **overrides):
+    """The experiment's scene with some parameters replaced (protocol, seed, sizes)."""
+    node = OmegaConf.to_container(cfg.scene, resolve=True)
+    node.update({k: _plain(v) for k, v in overrides.items()})
+    return instantiate(node)
+
+
+def calibrate(cfg, seed, calibration: dict, reconstruction: dict):
+    """(scene, fitted reconstruction) from one calibration recording of sensor `seed`."""
+    scene = scene_for(cfg, seed=seed, protocol="calibration", **calibration)
+    table = scene.generate()
+    model = TikhonovReconstruction(geometry=scene.geometry(), seed=seed, **reconstruction)
+    return scene, model.fit(table.channels, table.targets)
+
+
+def limit_of_quantification(cfg, seed, model, n_blank: int) -> dict:
+    blank = scene_for(cfg, seed=seed, protocol="blank", n_samples=n_blank).generate()
+    sd = float(model.predict(blank.channels)[:, 2].std(ddof=1))
+    area_mm2 = np.pi * (model.geometry["indenter_diameter_mm"] / 2.0) ** 2
+    return {"loq_n": 10.0 * sd, "loq_kpa": 10.0 * sd / area_mm2 * 1e3}
+
+
+def _mean_sd(values) -> list:
+    values = np.asarray(values, dtype=float)
+    return [float(values.mean()), float(values.std(ddof=1)) if len(values) > 1 else 0.0]
+
+
+def single_point_study(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None,
+                       test_forces_n=(10.0,), n_blank=100) -> tuple[pd.DataFrame, dict]:
+    """Presses on the 18 x 18 grid at `test_forces_n` for every seed: a frame of predictions."""
+    rows, loq, val = [], [], []
+    for seed in seeds:
+        scene, model = calibrate(cfg, seed, _plain(calibration) or {}, _plain(reconstruction) or {})
+        forces = sorted(float(f) for f in test_forces_n)
+        test = scene_for(cfg, seed=seed, protocol="single_point", n_force_levels=len(forces),
+                         force_range_n=[forces[0], forces[-1]]).generate()
+        prediction = model.predict(test.channels)
+        frame = pd.DataFrame(test.targets, columns=["x_mm", "y_mm", "force_n"])
+        frame[["x_pred_mm", "y_pred_mm", "force_pred_n"]] = prediction
+        frame["seed"] = seed
+        frame["error_mm"] = np.hypot(frame.x_pred_mm - frame.x_mm, frame.y_pred_mm - frame.y_mm)
+        frame["force_error_n"] = frame.force_pred_n - frame.force_n
+        rows.append(frame)
+        loq.append({"seed": seed, "alpha_relative": model.alpha_relative_, **limit_of_quantification(cfg, seed, model, n_blank)})
+        val.append(float(model.validation_scores_.min(axis=0)[0]))
+    return pd.concat(rows, ignore_index=True), {"loq": loq, "val_localisation_mm": val}
+
+
+def run_localisation(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None, test_force_n=10.0,
+                     n_blank=100) -> dict:
+    """Single-point localisation (seed 002 §5.1, fig. 12): error of the field's peak, presses
+    above the limit of quantification only."""
+    output_dir = Path(output_dir)
+    frame, extra = single_point_study(cfg, output_dir, seeds, calibration, reconstruction, (test_force_n,), n_blank)
+    loq = {row["seed"]: row["loq_n"] for row in extra["loq"]}
+    frame["above_loq"] = frame.force_n >= frame.seed.map(loq)
+    used = frame[frame.above_loq]
+    per_seed = used.groupby("seed").error_mm.agg(["mean", "std"])
+    metrics = {"scene": cfg.scene.name, "seeds": list(seeds),
+               "localisation_mm_per_seed": per_seed.round(3).values.tolist(),
+               "localisation_mm": _mean_sd(per_seed["mean"]),           # mean (over seeds) of per-seed means
+               "localisation_sd_mm": _mean_sd(per_seed["std"]),
+               "presses_used": len(used), "presses": len(frame),
+               "loq_kpa": _mean_sd([r["loq_kpa"] for r in extra["loq"]]),
+               "alpha_relative": [r["alpha_relative"] for r in extra["loq"]],
+               "paper": PAPER.get(cfg.scene.name, {}),
+               "val": {"localisation_mm": float(np.mean(extra["val_localisation_mm"]))}}
+    electrodes = OmegaConf.to_container(cfg.scene.electrodes_mm, resolve=True)
+    figure = _error_map(frame[frame.seed == seeds[0]], cfg.scene.side_mm, electrodes, metrics)
+    atomic_write(output_dir / "localisation_map.png", lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
+    plt.close(figure)
+    atomic_write_text(output_dir / "localisation.csv", frame.to_csv(index=False))
+    atomic_write_json(output_dir / "ert_metrics.json", metrics)
+    return metrics
+
+
+def run_force(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None,
+              test_forces_n=(4.0, 8.0, 12.0), n_blank=100) -> dict:
+    """Force estimation (seed 002 §5.3, fig. 14): the field's integral against the reference."""
+    output_dir = Path(output_dir)
+    frame, extra = single_point_study(cfg, output_dir, seeds, calibration, reconstruction, test_forces_n, n_blank)
+    per_seed = []
+    for seed, part in frame.groupby("seed"):
+        error = part.force_error_n.abs()
+        per_seed.append({"seed": int(seed), "abs_error_n": float(error.mean()), "abs_error_sd_n": float(error.std()),
+                         "rmse_n": float(np.sqrt((part.force_error_n ** 2).mean())),
+                         "r": float(np.corrcoef(part.force_n, part.force_pred_n)[0, 1])})
+    table = pd.DataFrame(per_seed)
+    metrics = {"scene": cfg.scene.name, "seeds": list(seeds), "test_forces_n": list(test_forces_n),
+               "force_error_n": _mean_sd(table.abs_error_n), "force_error_sd_n": _mean_sd(table.abs_error_sd_n),
+               "rmse_n": _mean_sd(table.rmse_n), "r": _mean_sd(table.r),
+               "loq_kpa": _mean_sd([r["loq_kpa"] for r in extra["loq"]]),
+               "per_reference_force": frame.groupby("force_n").force_pred_n.agg(["mean", "std"]).round(3).reset_index().values.tolist(),
+               "paper": PAPER.get(cfg.scene.name, {}),
+               "val": {"localisation_mm": float(np.mean(extra["val_localisation_mm"]))}}
+    figure, axes = plt.subplots(1, 2, figsize=(10, 4.2))
+    first = frame[frame.seed == seeds[0]]
+    rmse_map = first.groupby(["x_mm", "y_mm"]).force_error_n.apply(lambda e: np.sqrt((e ** 2).mean())).reset_index()
+    sc = axes[0].scatter(rmse_map.x_mm, rmse_map.y_mm, c=rmse_map.force_error_n, s=40, cmap="viridis", marker="s")
+    figure.colorbar(sc, ax=axes[0], label="force RMSE (N)")
+    axes[0].set(xlabel="x (mm)", ylabel="y (mm)", title=f"{cfg.scene.name}: RMSE per point (seed {seeds[0]})",
+                aspect="equal")
+    axes[1].errorbar(*frame.groupby("force_n").force_pred_n.agg(["mean", "std"]).reset_index().values.T, fmt="o",
+                     capsize=4, label="estimated (mean +- sd)")
+    limits = [0, max(test_forces_n) * 1.3]
+    axes[1].plot(limits, limits, "k--", lw=1, label="ideal")
+    axes[1].set(xlabel="reference force (N)", ylabel="estimated force (N)",
+                title=f"r = {metrics['r'][0]:.3f}, |error| = {metrics['force_error_n'][0]:.2f} N")
+    axes[1].legend()
+    figure.tight_layout()
+    atomic_write(output_dir / "force.png", lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
+    plt.close(figure)
+    atomic_write_text(output_dir / "force.csv", frame.to_csv(index=False))
+    atomic_write_json(output_dir / "ert_metrics.json", metrics)
+    return metrics
+
+
+def run_two_point(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None, n_repeats=10,
+                  significance=0.05) -> dict:
+    """Two-point discrimination (seed 002 §5.2, table 2) with the paired dip test (module docstring)."""
+    output_dir = Path(output_dir)
+    tables, distances = [], {}
+    for seed in seeds:
+        scene, model = calibrate(cfg, seed, _plain(calibration) or {}, _plain(reconstruction) or {})
+        test = scene_for(cfg, seed=seed, protocol="two_point", n_repeats=n_repeats).generate()
+        field = model.pressure_field_kpa(test.channels)
+        step = scene.side_mm / field.shape[-1]
+        pick = lambda x, y: field[np.arange(len(field)),
+                                  np.clip((y / step).astype(int), 0, field.shape[-1] - 1),
+                                  np.clip((x / step).astype(int), 0, field.shape[-1] - 1)]
+        f = test.frame
+        peaks = 0.5 * (pick(f.x1_mm.to_numpy(), f.y1_mm.to_numpy()) + pick(f.x2_mm.to_numpy(), f.y2_mm.to_numpy()))
+        middle = pick(f.x_mm.to_numpy(), f.y_mm.to_numpy())
+        rows = []
+        for (location, distance), index in f.groupby(["location", "distance_mm"]).groups.items():
+            difference = peaks[index] - middle[index]
+            if np.allclose(difference, difference[0]):
+                p = 0.0 if difference[0] > 0 else 1.0       # no spread: the sign decides
+            else:
+                p = float(stats.ttest_1samp(difference, 0.0, alternative="greater").pvalue)
+            rows.append({"seed": seed, "location": int(location), "distance_mm": float(distance), "p": p,
+                         "dip_kpa": float(difference.mean())})
+        table = pd.DataFrame(rows)
+        tables.append(table)
+        for location, part in table.groupby("location"):
+            part = part.sort_values("distance_mm")
+            significant = (part.p < significance).to_numpy()
+            j = len(significant)
+            while j > 0 and significant[j - 1]:
+                j -= 1
+            first = part.distance_mm.iloc[j] if j < len(part) else np.inf
+            distances.setdefault(int(location), []).append(float(first))
+    table = pd.concat(tables, ignore_index=True)
+    pivot = table[table.seed == seeds[0]].pivot(index="location", columns="distance_mm", values="p")
+    metrics = {"scene": cfg.scene.name, "seeds": list(seeds), "test": "one-sided paired t-test, peaks vs mid-point",
+               "significance": significance,
+               "discrimination_mm_per_location": {k: [d if np.isfinite(d) else "> max" for d in v]
+                                                  for k, v in distances.items()},
+               "p_table_seed0": {int(k): {float(d): float(p) for d, p in row.items()} for k, row in pivot.iterrows()},
+               "paper": PAPER.get(cfg.scene.name, {})}
+    atomic_write_text(output_dir / "two_point.csv", table.to_csv(index=False))
+    atomic_write_json(output_dir / "ert_metrics.json", metrics)
+    return metrics
+
+
+def _error_map(frame, side_mm, electrodes_mm, metrics):
+    figure, axis = plt.subplots(figsize=(5.6, 5.6))
+    axis.scatter(frame.x_mm, frame.y_mm, s=14, facecolors="none", edgecolors="k", lw=0.7, label="true")
+    for _, row in frame.iterrows():
+        axis.plot([row.x_mm, row.x_pred_mm], [row.y_mm, row.y_pred_mm], "r-", lw=0.7)
+    axis.plot(frame.x_pred_mm, frame.y_pred_mm, "rx", ms=3, label="estimated")
+    xy = np.asarray(electrodes_mm, dtype=float)
+    axis.plot(xy[:, 0], xy[:, 1], "bs", ms=5, label="electrodes")
+    axis.set(xlim=(-5, side_mm + 5), ylim=(-5, side_mm + 5), aspect="equal", xlabel="x (mm)", ylabel="y (mm)",
+             title=f"{metrics['scene']}, map of seed {int(frame.seed.iloc[0])}: "
+                   f"{frame.error_mm.mean():.2f} +- {frame.error_mm.std():.2f} mm")
+    axis.legend(loc="upper right", fontsize=7)
+    figure.tight_layout()
+    return figure

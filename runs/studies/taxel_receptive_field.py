@@ -1,0 +1,201 @@
+"""Study run `taxel_receptive_field`: seed 004's Fig. 2 and Fig. 4 from the taxels scene.
+
+    python train.py experiment=taxel_receptive_field
+
+Fig. 2: a needle scanned along x over one taxel (10 mN, 180 um cover): the strain components
+(gamma_x, gamma_y, eps_z) read back from the bridge voltages with eq. (2), for the semi-infinite
+model (eq. 1) and for the full scene (cover bonded to the chip, 100 um needle, the plate's size,
+amplifier, noise, ADC). Fig. 4: the eps_z profile's width W (between its zero crossings) and
+amplitude A (|eps_z| under the load) against cover thickness, for each cover model, with the
+paper's measured laws beside them (its text gives the fitted slope of W, 1.14, and the exponent
+of A, -1.45, not the points; the lines are drawn through the model's value at the middle
+thickness so only their slopes compare). Writes receptive_field.png, thickness.png, the same
+figures to TensorBoard, profiles.csv, thickness.csv and receptive_field.json (the fitted slopes and
+exponents it also returns; no "val" key: nothing here is a validation score).
+"""
+import json
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pandas as pd
+from hydra.utils import instantiate
+from omegaconf import OmegaConf
+
+from common.atomic import atomic_write, atomic_write_text
+from runs.report.tensorboard_logger import TensorBoardLogger
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+PAPER = {"w_slope": 1.14, "a_exponent": -1.45, "ratio": 19.0}
+THEORY = {"w_slope": 2.0 * np.sqrt(2.0), "a_exponent": -2.0, "ratio": 5.0**2.5}
+
+
+def _crossing(x, y, index_from, index_to):
+    """x where y changes sign between two neighbouring samples (linear interpolation)."""
+    y0, y1 = y[index_from], y[index_to]
+    return x[index_from] + (x[index_to] - x[index_from]) * y0 / (y0 - y1)
+
+
+def profile_metrics(x_mm, eps_z, centre_mm) -> dict:
+    """Seed 004 eq. (3)-(4) measured on a sampled eps_z(x) profile around a taxel at `centre_mm`.
+
+    amplitude: |eps_z| at its compressive peak; zero_crossing_mm: mean distance of the first sign
+    changes either side of the peak; width_mm: distance between them (W; nan when eps_z never
+    turns positive); minimum_at_mm: distance of the largest tensile value (the lateral lobe);
+    ratio: |peak / largest tensile value| (inf when there is none).
+    """
+    x = np.asarray(x_mm, dtype=float)
+    e = np.asarray(eps_z, dtype=float)
+    peak = int(np.argmin(e))
+    out = {"amplitude": float(-e[peak]), "peak_at_mm": float(x[peak] - centre_mm)}
+    right = np.flatnonzero(e[peak:] > 0)
+    left = np.flatnonzero(e[:peak + 1][::-1] > 0)
+    if right.size and left.size:
+        i_right = peak + right[0]
+        i_left = peak - left[0]
+        x_right = _crossing(x, e, i_right - 1, i_right)
+        x_left = _crossing(x, e, i_left + 1, i_left)
+        out["width_mm"] = float(x_right - x_left)
+        out["zero_crossing_mm"] = float(0.5 * (x_right - x_left))
+    else:
+        out["width_mm"] = out["zero_crossing_mm"] = float("nan")
+    lobe = int(np.argmax(e))
+    if e[lobe] > 0:
+        if 0 < lobe < len(e) - 1:  # parabola through the three samples around the extreme
+            denominator = e[lobe - 1] - 2 * e[lobe] + e[lobe + 1]
+            shift = 0.5 * (e[lobe - 1] - e[lobe + 1]) / denominator if denominator else 0.0
+        else:
+            shift = 0.0
+        at = x[lobe] + shift * (x[1] - x[0])
+        out["minimum_at_mm"] = float(abs(at - centre_mm))
+        out["ratio"] = float(out["amplitude"] / e[lobe])
+    else:
+        out["minimum_at_mm"], out["ratio"] = float("nan"), float("inf")
+    return out
+
+
+def fit_laws(thickness_um, width_mm, amplitude) -> dict:
+    """Slope of W against thickness (least squares with intercept, mm per mm) and the exponent of
+    A against thickness (least squares in log-log), over the points where each is defined."""
+    z = np.asarray(thickness_um, dtype=float) * 1e-3
+    w = np.asarray(width_mm, dtype=float)
+    a = np.asarray(amplitude, dtype=float)
+    ok = np.isfinite(w)
+    slope = float(np.polyfit(z[ok], w[ok], 1)[0]) if ok.sum() >= 2 else float("nan")
+    exponent = float(np.polyfit(np.log(z), np.log(a), 1)[0])
+    return {"w_slope": slope, "a_exponent": exponent}
+
+
+def _scene(cfg, effects: dict, **overrides):
+    node = OmegaConf.to_container(cfg.scene, resolve=True)
+    node.update(overrides)
+    node["effects"] = effects
+    return instantiate(node)
+
+
+def _needle_profile(cfg, effects, thickness_um, n_points, force_mn):
+    """Scan one taxel's row; returns x (mm), the eq.-(2) strains of taxel 0 (n, 3), its x."""
+    base = _scene(cfg, effects, protocol="needle_scan", n_samples=n_points, cover_thickness_um=thickness_um,
+                  needle_force_mn=force_mn)
+    centre = base.taxel_xy_mm()[0, 0]
+    reach = max(4.0 * thickness_um * 1e-3, 1.0)
+    base.scan_range_mm = (centre - reach, centre + reach)
+    table = base.generate()
+    bridges = table.channels
+    gain = effects.get("amplifier", {}).get("gain", 1.0) if "amplifier" in effects else 1.0
+    strain = base.strain_from_bridges(bridges / gain)[:, 0, :]
+    return table.frame["x_mm"].to_numpy(), strain, centre
+
+
+def run_receptive_field(cfg, output_dir, models: dict, thickness_um: list, fig2_thickness_um: float = 180.0,
+                        n_points: int = 1201, force_mn: float = 10.0) -> dict:
+    """The study (module docstring). `models`: label -> effects mapping of the taxels scene."""
+    output_dir = Path(output_dir)
+    models = {label: OmegaConf.to_container(e, resolve=True) if not isinstance(e, dict) else e
+              for label, e in models.items()}
+    thickness_um = [float(t) for t in thickness_um]
+
+    rows, profiles = [], []
+    for label, effects in models.items():
+        for z in thickness_um:
+            x, strain, centre = _needle_profile(cfg, effects, z, n_points, force_mn)
+            rows.append({"model": label, "thickness_um": z, **profile_metrics(x, strain[:, 2], centre)})
+        x, strain, centre = _needle_profile(cfg, effects, fig2_thickness_um, n_points, force_mn)
+        profiles.append(pd.DataFrame({"model": label, "x_mm": x - centre, "gamma_x": strain[:, 0],
+                                      "gamma_y": strain[:, 1], "eps_z": strain[:, 2]}))
+        rows.append({"model": label, "thickness_um": fig2_thickness_um, "fig2": True,
+                     **profile_metrics(x, strain[:, 2], centre)})
+    table = pd.DataFrame(rows)
+    table["fig2"] = table.get("fig2", False)
+    table["fig2"] = table["fig2"].astype("boolean").fillna(False).astype(bool)
+    profiles = pd.concat(profiles, ignore_index=True)
+
+    metrics = {"paper": dict(PAPER), "half_space_theory": dict(THEORY)}
+    for label in models:
+        series = table[(table.model == label) & ~table.fig2]
+        laws = fit_laws(series.thickness_um, series.width_mm, series.amplitude)
+        fig2 = table[(table.model == label) & table.fig2].iloc[0]
+        metrics[label] = {**laws, "ratio_fig2": float(fig2.ratio), "width_fig2_mm": float(fig2.width_mm),
+                          "amplitude_fig2": float(fig2.amplitude)}
+
+    figures = {"receptive_field": _profile_figure(profiles, fig2_thickness_um),
+               "thickness": _thickness_figure(table[~table.fig2], metrics)}
+    with TensorBoardLogger(str(output_dir / "tensorboard")) as logger:
+        for name, figure in figures.items():
+            logger.log_figure(f"taxels/{name}", figure)
+        for label in models:
+            for key, value in metrics[label].items():
+                logger.writer_.add_scalar(f"taxels/{label}/{key}", value)
+    for name, figure in figures.items():
+        atomic_write(output_dir / f"{name}.png", lambda tmp, f=figure: f.savefig(tmp, dpi=110, format="png"))
+        plt.close(figure)
+    finite = {model: {key: (value if np.isfinite(value) else None) for key, value in row.items()}
+              for model, row in metrics.items()}  # strict JSON: no NaN or Infinity (null: not defined)
+    atomic_write_text(output_dir / "receptive_field.json", json.dumps(finite, indent=2))
+    atomic_write_text(output_dir / "thickness.csv", table.to_csv(index=False))
+    atomic_write_text(output_dir / "profiles.csv", profiles.to_csv(index=False))
+    return metrics
+
+
+def _profile_figure(profiles, thickness_um):
+    labels = list(dict.fromkeys(profiles.model))
+    figure, axes = plt.subplots(1, len(labels), figsize=(4.2 * len(labels), 3.4), squeeze=False)
+    for ax, label in zip(axes[0], labels):
+        p = profiles[profiles.model == label]
+        for component, style in (("gamma_x", "-"), ("gamma_y", ":"), ("eps_z", "-")):
+            ax.plot(p.x_mm, p[component], style, label=component)
+        ax.axhline(0.0, color="grey", lw=0.5)
+        ax.set_title(f"{label} ({thickness_um:.0f} um cover)", fontsize=9)
+        ax.set_xlabel("needle x - taxel x (mm)")
+    axes[0, 0].set_ylabel("strain at the taxel (eq. 2)")
+    axes[0, 0].legend(fontsize=8)
+    figure.suptitle("Seed 004 Fig. 2: a 10 mN needle scanned over a taxel", fontsize=10)
+    figure.tight_layout()
+    return figure
+
+
+def _thickness_figure(table, metrics):
+    figure, (ax_w, ax_a) = plt.subplots(1, 2, figsize=(9.5, 3.8))
+    for label in dict.fromkeys(table.model):
+        t = table[table.model == label]
+        ax_w.plot(t.thickness_um, t.width_mm, "o-", ms=3, label=f"{label} (slope {metrics[label]['w_slope']:.2f})")
+        ax_a.loglog(t.thickness_um, t.amplitude, "o-", ms=3, label=f"{label} (exp {metrics[label]['a_exponent']:.2f})")
+    z = np.asarray(sorted(set(table.thickness_um)))
+    middle = z[len(z) // 2]
+    first = table[table.model == table.model.iloc[0]].set_index("thickness_um")
+    if np.isfinite(first.width_mm.get(middle, np.nan)):
+        w_mid = first.width_mm[middle]
+        ax_w.plot(z, w_mid + PAPER["w_slope"] * (z - middle) * 1e-3, "k--", label="paper: slope 1.14")
+    a_mid = first.amplitude[middle]
+    ax_a.loglog(z, a_mid * (z / middle) ** PAPER["a_exponent"], "k--", label="paper: z^-1.45")
+    ax_w.set_xlabel("cover thickness (um)")
+    ax_w.set_ylabel("W, width between zero crossings (mm)")
+    ax_a.set_xlabel("cover thickness (um)")
+    ax_a.set_ylabel("A = |eps_z| under the load")
+    ax_w.legend(fontsize=7)
+    ax_a.legend(fontsize=7)
+    figure.suptitle("Seed 004 Fig. 4: receptive field against cover thickness", fontsize=10)
+    figure.tight_layout()
+    return figure
