@@ -64,19 +64,11 @@ def main(cfg: DictConfig) -> float:
         apply_threads(threads)
         log.info("threads: %d per process (threads=%s)", threads, cfg.threads)
         with phase("start-up (imports)"):
-            from export.latency import record_costs
-            from export.run_export import export_run
             from runs.run import run
-        try:
-            metrics = run(cfg, stage)
+        try:  # fit, report, export, latency, metrics.json: all into the stage
+            metrics = run(cfg, stage, running["config_hash"])
         except InstantiationException as error:
             raise as_input_error(error) from None
-        if cfg.export.enabled:
-            with phase("ONNX export"):  # the hash taken before the run; the stage holds no .hydra/
-                export_run(stage, cfg.export.opset, cfg.export.file, running["config_hash"])
-        if cfg.cost.measure_latency:
-            with phase("latency measurement"):
-                metrics = record_costs(stage, cfg.export.file, cfg.cost.budget_s)
         for item in sorted(stage.iterdir()):
             os.replace(item, output_dir / item.name)
             moved.append(output_dir / item.name)

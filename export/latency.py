@@ -3,7 +3,7 @@ onnxruntime (one intra-op thread and its default), with the thread settings and 
 
 Measured in-process on the run's own raw test inputs, after warm-up, repeating calls until a
 time budget is spent (at least 5 calls; slow eager pipelines get fewer repetitions, recorded
-as `reps`). `record_costs` merges the figures into the run's metrics.json and TensorBoard.
+as `reps`). runs/run.py adds them to the run's metrics before metrics.json is written.
 
 A fair eager baseline: the eager pipeline is timed as a deployed user would call it, in-process,
 with every scikit-learn estimator inside it (forests included) predicting on one job
@@ -11,7 +11,6 @@ with every scikit-learn estimator inside it (forests included) predicting on one
 themselves, and models/trees.py already predicts on one job after fitting. The metrics say so
 (`cost.eager_baseline`).
 """
-import json
 import logging
 import os
 import time
@@ -20,11 +19,10 @@ from pathlib import Path
 import numpy as np
 import torch
 
-from common.atomic import atomic_write_json
 from common.errors import InputError
 from common.progress import progress
 from export.onnx_predictor import OnnxPredictor
-from models.deployable import PIPELINE_FILE, RegressionPipeline, load_pipeline
+from models.deployable import RegressionPipeline
 
 log = logging.getLogger(__name__)
 
@@ -75,6 +73,9 @@ def single_job(model, seen=None) -> int:
 
 
 def measure(pipeline, model_path=None, budget_s: float = 1.0) -> dict:
+    """Latency and throughput of a fitted pipeline (eager) and of its exported model_path (onnxruntime)."""
+    if not budget_s > 0:
+        raise InputError(f"cost.budget_s must be a positive number of seconds, got {budget_s}")
     if pipeline.examples is None or len(pipeline.examples) == 0:
         return {}
     batch = np.resize(pipeline.examples, (1024,) + pipeline.examples.shape[1:])
@@ -97,26 +98,17 @@ def measure(pipeline, model_path=None, budget_s: float = 1.0) -> dict:
     return cost
 
 
-def record_costs(run_dir, model_file: str = "model.onnx", budget_s: float = 1.0) -> dict:
-    """Measure a finished run's inference costs and merge them into metrics.json and TensorBoard."""
-    run_dir = Path(run_dir)
-    if not budget_s > 0:
-        raise InputError(f"cost.budget_s must be a positive number of seconds, got {budget_s}")
-    cost = measure(load_pipeline(run_dir / PIPELINE_FILE), run_dir / model_file, budget_s)
-    metrics = json.loads((run_dir / "metrics.json").read_text())
-    metrics.setdefault("cost", {}).update(cost)
-    atomic_write_json(run_dir / "metrics.json", metrics)
-    from torch.utils.tensorboard import SummaryWriter
-    with SummaryWriter(log_dir=str(run_dir / "tensorboard")) as writer:
-        for name, values in cost.get("latency_batch1_us", {}).items():
-            writer.add_scalar(f"cost/latency_p50_us/{name}", values["p50"])
-            writer.add_scalar(f"cost/latency_p99_us/{name}", values["p99"])
-        for name, value in cost.get("throughput_batch1024_per_s", {}).items():
-            writer.add_scalar(f"cost/throughput_per_s/{name}", value)
-        if "model_size_bytes" in cost:
-            writer.add_scalar("cost/model_size_bytes", cost["model_size_bytes"])
+def log_costs(cost: dict, logger=None) -> None:
+    """The costs as TensorBoard scalars (through the run's one logger) and one log line."""
     latency = cost.get("latency_batch1_us", {})
+    if logger is not None:
+        for name, values in latency.items():
+            logger.writer_.add_scalar(f"cost/latency_p50_us/{name}", values["p50"])
+            logger.writer_.add_scalar(f"cost/latency_p99_us/{name}", values["p99"])
+        for name, value in cost.get("throughput_batch1024_per_s", {}).items():
+            logger.writer_.add_scalar(f"cost/throughput_per_s/{name}", value)
+        if "model_size_bytes" in cost:
+            logger.writer_.add_scalar("cost/model_size_bytes", cost["model_size_bytes"])
     log.info("cost: fit %.2f s wall, %.2f s CPU; batch-1 latency p50 %s; %d cores",
-             metrics["cost"].get("fit_time_s", float("nan")), metrics["cost"].get("fit_cpu_time_s", float("nan")),
+             cost.get("fit_time_s", float("nan")), cost.get("fit_cpu_time_s", float("nan")),
              ", ".join(f"{k} {v['p50']:,.0f} us" for k, v in latency.items()), cost.get("cores", 0))
-    return metrics

@@ -77,8 +77,9 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
                                 datamodule.test_levels_per_window, timeseries_pipeline(datamodule, model), hparams)
 
 
-def run_classification(cfg, output_dir, datamodule) -> dict:
-    with instantiate(cfg.logger, log_dir=str(Path(output_dir) / "tensorboard")) as logger:
-        result = fit_and_evaluate(cfg, datamodule, logger.log_epoch, output_dir)
-        write_classification_report(result, output_dir, logger)
-    return result.metrics
+def run_classification(cfg, output_dir, datamodule, logger):
+    """Fit, evaluate and report -> (metrics, the deployable pipeline); runs/run.py exports it,
+    measures its costs and writes the metrics."""
+    result = fit_and_evaluate(cfg, datamodule, logger.log_epoch, output_dir)
+    write_classification_report(result, output_dir, logger)
+    return result.metrics, result.pipeline

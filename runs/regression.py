@@ -1,6 +1,6 @@
 """One regression run, top to bottom: fit, predict, intervals, analysis -> one result; then the
-report side (runs/report/regression_report.py) writes it once: metrics, figures, TensorBoard
-and files.
+report side (runs/report/regression_report.py) writes it once: figures, TensorBoard, predictions
+and the pipeline (runs/run.py then exports it and writes metrics.json).
 """
 import time
 from dataclasses import dataclass, field
@@ -10,6 +10,7 @@ import numpy as np
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
+from common.progress import phase
 from models.deployable import RegressionPipeline, regression_pipeline
 from runs.report.analysis import edge_vs_centre, feature_ablation, identifiability_map, interval_report
 from runs.report.metrics import regression_metrics
@@ -157,8 +158,10 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
     return result
 
 
-def run_regression(cfg: DictConfig, output_dir: str | Path, datamodule) -> dict:
-    with instantiate(cfg.logger, log_dir=str(Path(output_dir) / "tensorboard")) as logger:
+def run_regression(cfg: DictConfig, output_dir: str | Path, datamodule, logger):
+    """Fit, evaluate and report -> (metrics, the deployable pipeline); runs/run.py exports it,
+    measures its costs and writes the metrics."""
+    with phase(f"fitting and evaluating on {len(datamodule.train_idx):,} training rows"):
         result = fit_and_evaluate(cfg, datamodule, logger.log_epoch)
-        write_regression_report(result, output_dir, logger, datamodule.feature_names)
-    return result.metrics
+    write_regression_report(result, output_dir, logger, datamodule.feature_names)
+    return result.metrics, result.pipeline

@@ -1,13 +1,16 @@
-"""A Touchstone run: seed everything, set up the datamodule, and hand over to the pipeline of its
-task (regression on tabular presses, or classification of time-series windows).
+"""A Touchstone run, top to bottom: check and seed, fit and report (the task's pipeline or a
+study), export the model to ONNX, measure what a prediction costs, and write metrics.json once.
 
 A run that is not "fit one model on one datamodule" (a scene study such as a receptive-field
 profile, a contact tracker on a stream) is a `study`: an experiment sets `study:` to a node with
-a `_target_` function `(cfg, output_dir, **params) -> metrics dict`, and that function does
-the whole run. Such experiments set `export: none` and `cost.measure_latency: false` when they
-leave no model for export/ to convert.
+a `_target_` function `(cfg, output_dir, logger, **params) -> metrics dict` that does the whole
+run's work and writes its own tables and figures; its metrics are written here like any run's.
+Studies leave no pipeline, so nothing is exported for them.
 
-train.py calls `run(cfg, output_dir)`; tests call it too with a composed config and a tmp_path.
+Every artefact has one writer, called once: figures, predictions and pipeline.npz by the
+report (runs/report/), model.onnx by export/run_export.write_onnx, metrics.json by
+runs/report/metrics_file.write_metrics, TensorBoard through the one logger opened here.
+train.py calls `run(cfg, output_dir, config_hash)`; tests call it with a composed config.
 """
 import logging
 import random
@@ -19,9 +22,13 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import call, instantiate
 from omegaconf import DictConfig
 
+from common.progress import phase
+from export.latency import log_costs, measure
+from export.run_export import write_onnx
 from runs.classification import run_classification
 from runs.config_checks import check_config
 from runs.regression import run_regression
+from runs.report.metrics_file import write_metrics
 
 log = logging.getLogger(__name__)
 
@@ -32,15 +39,29 @@ def seed_everything(seed: int) -> None:
     torch.manual_seed(seed)
 
 
-def run(cfg: DictConfig, output_dir: str | Path) -> dict:
+def run(cfg: DictConfig, output_dir: str | Path, config_hash: str = "unknown") -> dict:
     # train.py checked the command's config before start-up; a sweep's job gets its own config
     # from Hydra, so each is checked here, and told which of its trainer overrides reach nothing.
     overrides = HydraConfig.get().overrides.task if HydraConfig.initialized() else ()
     for warning in check_config(cfg, overrides):
         log.warning(warning)
     seed_everything(cfg.seed)
-    if cfg.get("study") is not None:
-        return call(cfg.study, cfg, output_dir)
-    datamodule = instantiate(cfg.data).setup()
-    pipeline = run_classification if getattr(datamodule, "task", "regression") == "classification" else run_regression
-    return pipeline(cfg, output_dir, datamodule)
+    output_dir = Path(output_dir)
+    with instantiate(cfg.logger, log_dir=str(output_dir / "tensorboard")) as logger:
+        if cfg.get("study") is not None:
+            metrics = {"study": cfg.study._target_.rsplit(".", 1)[-1], **call(cfg.study, cfg, output_dir, logger)}
+        else:
+            datamodule = instantiate(cfg.data).setup()
+            task = getattr(datamodule, "task", "regression")
+            fit_and_report = run_classification if task == "classification" else run_regression
+            metrics, pipeline = fit_and_report(cfg, output_dir, datamodule, logger)
+            model_path = None
+            if cfg.export.enabled:
+                with phase("ONNX export"):
+                    model_path = write_onnx(pipeline, output_dir / cfg.export.file, cfg.export.opset, config_hash)
+            if cfg.cost.measure_latency:
+                with phase("latency measurement"):
+                    metrics["cost"].update(measure(pipeline, model_path, cfg.cost.budget_s))
+                log_costs(metrics["cost"], logger)
+        write_metrics(output_dir, metrics, logger)
+    return metrics

@@ -18,12 +18,16 @@ TINY = ["study.seeds=[0,1]", "study.calibration.grid_points_per_side=4", "scene.
 def test_single_point_studies_write_their_tables(compose_config, tmp_path, experiment, files):
     cfg = compose_config([f"experiment={experiment}", "scene=ert_boundary", *TINY, "study.n_blank=10"])
     metrics = run(cfg, tmp_path)
-    for name in files + ["ert_metrics.json"]:
+    for name in files + ["metrics.json"]:
         assert (tmp_path / name).exists(), name
-    assert json.loads((tmp_path / "ert_metrics.json").read_text())["scene"] == "ert_boundary"
+    written = json.loads((tmp_path / "metrics.json").read_text())
+    assert written["scene"] == "ert_boundary" and written["study"] == f"run_{experiment.removeprefix('ert_')}"
     assert "val" in metrics
     key = "localisation_mm" if experiment == "ert_localisation" else "force_error_n"
-    assert 0.0 < metrics[key][0] < 200.0
+    # labelled mean and spread over the two simulated sensors, as written
+    assert set(written[key]) == {"mean", "sd", "n"} and written[key]["n"] == 2
+    assert 0.0 < written[key]["mean"] < 200.0 and written[key]["sd"] >= 0.0
+    assert any(p.name.startswith("events.out.tfevents") for p in (tmp_path / "tensorboard").iterdir())
 
 
 def test_two_point_study_gives_a_p_value_per_location_and_distance(compose_config, tmp_path):
@@ -51,8 +55,8 @@ def test_learned_study_compares_with_tikhonov_on_the_same_presses(compose_config
                           "model.candidates.resmlp.estimator.max_epochs=2", "model.candidates.random_forest.estimator.n_estimators=3",
                           "model.candidates.extra_trees.estimator.n_estimators=3"])
     metrics = run(cfg, tmp_path)
-    models = {row["model"] for row in metrics["summary"]}
-    assert models == {"tikhonov", "extra_trees", "resmlp", "blend"}
+    assert set(metrics["summary"]) == {"tikhonov", "extra_trees", "resmlp", "blend"}
+    assert set(metrics["summary"]["tikhonov"]["localisation_mm"]) == {"mean", "sd", "n"}
     assert metrics["features"] == "tikhonov_peak_window"
     table = (tmp_path / "learned_vs_tikhonov.csv").read_text()
     assert "coverage_force" in table and "loo_coverage_force" in table   # 5 calibration recordings, left out in turn
@@ -66,5 +70,5 @@ def test_learned_study_compares_with_tikhonov_on_the_same_presses(compose_config
 def test_learned_study_bad_options_are_one_line_before_any_work(compose_config, tmp_path, option, message):
     cfg = compose_config(["experiment=ert_learned", "scene=ert_boundary"])
     with pytest.raises(InputError, match=message):
-        run_learned(cfg, tmp_path, **option)
+        run_learned(cfg, tmp_path, None, **option)
     assert not any(tmp_path.iterdir())

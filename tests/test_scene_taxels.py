@@ -314,7 +314,7 @@ def test_receptive_field_study_writes_its_figures(compose_config, tmp_path):
                           "~study.models.frictionless_layer",
                           "~study.models.frictionless_strain_real", "~study.models.bonded_cover_strain_real"])
     metrics = run(cfg, tmp_path)
-    for name in ("receptive_field.png", "thickness.png", "thickness.csv", "profiles.csv", "receptive_field.json"):
+    for name in ("receptive_field.png", "thickness.png", "thickness.csv", "profiles.csv", "metrics.json"):
         assert (tmp_path / name).stat().st_size > 0
     assert any((tmp_path / "tensorboard").iterdir())
     assert metrics["half_space"]["a_exponent"] == pytest.approx(-2.0, rel=0.01)

@@ -13,6 +13,7 @@ import pytest
 from conftest import tiny
 from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
 
+from runs.report.metrics_file import json_safe
 from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -58,7 +59,8 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
     for split in ("val", "test"):
         assert set(saved[split]) == {"x_mm", "y_mm", "depth_mm", "pressure_pa", "average"}
         assert set(saved[split]["average"]) == {"r2", "mape_pct"}  # only unitless scores are averaged
-    assert saved == json.loads(json.dumps(metrics))
+    assert saved == json_safe(metrics)  # strict JSON: a value not defined (NaN) is written as null
+    assert "NaN" not in (tmp_path / "metrics.json").read_text()
 
     predictions = pd.read_csv(tmp_path / "predictions.csv")
     assert len(predictions) == saved["data"]["n_test"]

@@ -1,14 +1,14 @@
 """The report of a classification run: confusion matrices for validation and test (PNG and
 TensorBoard), final scalars and hyper-parameters, predictions.csv (with class probabilities),
-pipeline.npz, metrics.json and the log line. Validation is what runs are chosen on; test, never used for choosing, is reported
-beside it so the number a reader quotes is an honest one."""
+pipeline.npz and the log line (metrics.json: runs/report/metrics_file.py). Validation is what
+runs are chosen on; test, never used for choosing, is reported beside it so the number a reader quotes is an honest one."""
 import logging
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
-from common.atomic import atomic_write, atomic_write_json
+from common.atomic import atomic_write
 from models.deployable import PIPELINE_FILE, save_pipeline
 from runs.report import plots
 
@@ -56,7 +56,6 @@ def write_classification_report(result, output_dir, logger) -> None:
         atomic_write(output_dir / FIGURE_FILES[split], lambda tmp, fig=figure: fig.savefig(tmp, dpi=110, format="png"))
         plots.plt.close(figure)
     save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
-    atomic_write_json(output_dir / "metrics.json", metrics)
     val, test = metrics["val"], metrics["test"]
     log.info("%s (%d parameters) fitted in %.1f s: validation accuracy %.4f (macro-F1 %.4f, loss %.4f, by level %s); "
              "test accuracy %.4f (macro-F1 %.4f, loss %.4f, by level %s)",

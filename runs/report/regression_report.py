@@ -1,5 +1,6 @@
 """The report of a regression run: one call turns a RegressionResult into figures, TensorBoard
-scalars and hyper-parameters, predictions.csv, pipeline.npz, metrics.json and log lines.
+scalars and hyper-parameters, predictions.csv, pipeline.npz and log lines (metrics.json is
+written once by runs/report/metrics_file.py after export and latency).
 
 Nothing here fits or predicts: runs/regression.py computed everything.
 """
@@ -8,7 +9,7 @@ from pathlib import Path
 
 import pandas as pd
 
-from common.atomic import atomic_write, atomic_write_json
+from common.atomic import atomic_write
 from models.deployable import PIPELINE_FILE, save_pipeline
 from runs.report import plots
 from runs.report.analysis import format_ablation
@@ -91,5 +92,4 @@ def write_regression_report(result, output_dir, logger, feature_names) -> None:
         atomic_write(output_dir / f"{name}.png", lambda tmp, f=figure: f.savefig(tmp, dpi=110, format="png"))
         plots.plt.close(figure)
     save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
-    atomic_write_json(output_dir / "metrics.json", result.metrics)
     _log_summary(result.metrics, output_dir)

@@ -16,11 +16,19 @@ class TensorBoardLogger:
         self.log_dir = log_dir
 
     def __enter__(self):
-        self.writer_ = SummaryWriter(log_dir=self.log_dir)
+        self._writer = None
         return self
 
+    @property
+    def writer_(self) -> SummaryWriter:
+        """Opened on first use: a run that fails before logging anything leaves no event file."""
+        if self._writer is None:
+            self._writer = SummaryWriter(log_dir=self.log_dir)
+        return self._writer
+
     def __exit__(self, *exc):
-        self.writer_.close()
+        if self._writer is not None:
+            self._writer.close()
 
     def log_epoch(self, record: dict) -> None:
         """Every number of an epoch record: train_loss -> loss/train, val_accuracy -> accuracy/val, lr -> lr."""

@@ -39,7 +39,7 @@ import pandas as pd
 from hydra.utils import get_object, instantiate
 from omegaconf import DictConfig, OmegaConf
 
-from common.atomic import atomic_write_json, atomic_write_text
+from common.atomic import atomic_write_text
 from common.errors import InputError
 from common.threads import configured_threads
 from data.preprocessing.contact_windows import window_channel_names
@@ -50,7 +50,6 @@ from models.contact_tracking.force import force_reader
 from models.contact_tracking.timing import latency_summary, timed_updates
 from runs.regression import fit_and_evaluate
 from runs.report.contact_animation import write_contact_animation
-from runs.report.tensorboard_logger import TensorBoardLogger
 from runs.report.tracking_metrics import evaluate_tracking
 
 CSV_COLUMNS = ["frame", "id", "x_mm", "y_mm", "cells", "mean_load", "peak_load", "force_n"]
@@ -159,7 +158,7 @@ def track(stream: ContactStream, params: dict, force, keep_images: bool):
     return table, timing, images
 
 
-def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_force_n: float = 0.3,
+def run_capacitive_tracking(cfg: DictConfig, output_dir, logger, trackers: dict, min_force_n: float = 0.3,
                             match_radius_mm: float | None = None, force_model: str | None = "pipeline",
                             force_repetitions: int = 10, recording: dict | None = None,
                             animation: dict | None = None) -> dict:
@@ -208,14 +207,13 @@ def run_capacitive_tracking(cfg: DictConfig, output_dir, trackers: dict, min_for
         out = table.rename(columns={}).loc[:, CSV_COLUMNS]
         atomic_write_text(output_dir / ("contacts.csv" if name == primary else f"contacts_{name}.csv"),
                           out.to_csv(index=False, float_format="%.4f"))
-    _tensorboard(output_dir, metrics, tables[primary], stream)
+    _log_contacts_per_frame(logger, tables[primary], stream)
     labels, shown, load = images
     metrics["animation"] = write_contact_animation(
         load, shown, labels, tables[primary].assign(frame=tables[primary].frame - stream.n_rest_frames),
         output_dir / "contacts.gif", output_dir / "contacts.png", stream.pitch_mm, stream.frame_rate_hz,
         max_frames=int(animation.get("max_frames", 60)), n_panels=int(animation.get("n_panels", 3)),
         fps=int(animation.get("fps", 15)))
-    atomic_write_json(output_dir / "metrics.json", _json_safe(metrics))
     return metrics
 
 
@@ -232,27 +230,9 @@ def _force_error(truth: pd.DataFrame, table: pd.DataFrame, radius: float) -> dic
             "force_mae_n": float(np.mean(np.abs(error))) if len(near) else float("nan"), "force_pairs": int(len(near))}
 
 
-def _tensorboard(output_dir: Path, metrics: dict, contacts: pd.DataFrame, stream: ContactStream) -> None:
-    with TensorBoardLogger(str(output_dir / "tensorboard")) as logger:
-        for name, entry in metrics["trackers"].items():
-            logger.writer_.add_scalar(f"timing/{name}/p50_us", entry["timing"]["p50_us"])
-            for key, value in (entry.get("overall") or {}).items():
-                if isinstance(value, (int, float)) and np.isfinite(value):
-                    logger.writer_.add_scalar(f"tracking/{name}/{key}", value)
-            for scenario, row in (entry.get("by_scenario") or {}).items():
-                logger.writer_.add_scalar(f"id_switches/{name}/{scenario}", row["id_switches"])
-        per_frame = contacts.groupby("frame").size().reindex(range(stream.n_frames), fill_value=0)
-        for frame, count in per_frame.items():
-            logger.writer_.add_scalar("stream/contacts", int(count), int(frame))
-
-
-def _json_safe(value):
-    if isinstance(value, dict):
-        return {str(k): _json_safe(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_json_safe(v) for v in value]
-    if isinstance(value, (np.floating, float)):
-        return float(value) if np.isfinite(value) else None
-    if isinstance(value, np.integer):
-        return int(value)
-    return value
+def _log_contacts_per_frame(logger, contacts: pd.DataFrame, stream: ContactStream) -> None:
+    """The number of contacts in every frame, a TensorBoard series (the metrics' numbers are
+    logged with metrics.json by runs/report/metrics_file.py)."""
+    per_frame = contacts.groupby("frame").size().reindex(range(stream.n_frames), fill_value=0)
+    for frame, count in per_frame.items():
+        logger.writer_.add_scalar("stream/contacts", int(count), int(frame))

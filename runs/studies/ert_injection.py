@@ -1,4 +1,4 @@
-"""Study run `ert_injection`: optimal pairwise injection (seed 002 §4.2, fig. 9) and accuracy
+"""Study run `ert_injection`: optimal pairwise injection (the ERT study's §4.2, fig. 9) and accuracy
 against acquisition time, on the scene in `cfg.scene`.
 
     python train.py experiment=ert_injection scene=ert_internal      (and scene=ert_boundary)
@@ -12,7 +12,7 @@ against acquisition time, on the scene in `cfg.scene`.
    is calibrated and tested (single-point localisation at `test_force_n`) on each seed's
    recordings. A subset's channels are columns of the all-pairs recording (each reading is its
    own measurement with its own noise), so every set sees the same presses. Frame time =
-   injections x measurements / switching rate (333 kHz, seed 002 §3.4).
+   injections x measurements / switching rate (333 kHz, the ERT study's §3.4).
 """
 from pathlib import Path
 
@@ -20,7 +20,7 @@ import matplotlib
 import numpy as np
 import pandas as pd
 
-from common.atomic import atomic_write, atomic_write_json, atomic_write_text
+from common.atomic import atomic_write_text
 from data.physics.optimal_injection import (
     all_pairs,
     perturbation_operator,
@@ -28,11 +28,14 @@ from data.physics.optimal_injection import (
 )
 from data.scenes.ert import patch_weights
 from models.tikhonov_reconstruction import TikhonovReconstruction
-from runs.studies.ert_tests import _plain, scene_for
+from runs.report.figure_files import write_figures
+from runs.report.plots import readable_log_axis
+from runs.studies.ert_tests import PAPER_NAME, _plain, scene_for
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+ORDER_NAMES = {"optimal": "in recruitment order", "random": "in a random order", "adjacent": "adjacent pairs only"}
 PAPER = {"pairs_recruited": 94, "iterations": 8, "operator_error_reduction_pct": 73.45}
 
 
@@ -50,7 +53,7 @@ def scene_for_nominal(scene):
     return scene
 
 
-def run_injection(cfg, output_dir, seeds=(0, 1, 2), max_iterations=300, tie_tolerance=1e-6,
+def run_injection(cfg, output_dir, logger, seeds=(0, 1, 2), max_iterations=300, tie_tolerance=1e-6,
                   pair_counts=(12, 24, 48, 94, 138, 276), switching_hz=333e3, test_force_n=10.0,
                   calibration=None, reconstruction=None) -> dict:
     output_dir = Path(output_dir)
@@ -61,9 +64,8 @@ def run_injection(cfg, output_dir, seeds=(0, 1, 2), max_iterations=300, tie_tole
     per_iteration = pd.DataFrame({"iteration": np.arange(1, len(recruitment.error_per_iteration) + 1),
                                   "pairs": recruitment.count_per_iteration,
                                   "operator_error": recruitment.error_per_iteration})
-    figure = _figure9(recruitment, np.asarray(scene.electrodes_mm, dtype=float), scene.side_mm, cfg.scene.name)
-    atomic_write(output_dir / "injection_selection.png", lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
-    plt.close(figure)
+    figures = {"injection_selection": _figure9(recruitment, np.asarray(scene.electrodes_mm, dtype=float),
+                                               scene.side_mm, cfg.scene.name)}
 
     n_electrodes = scene.n_electrodes
     everything = all_pairs(n_electrodes)
@@ -96,15 +98,8 @@ def run_injection(cfg, output_dir, seeds=(0, 1, 2), max_iterations=300, tie_tole
     summary = table.groupby(["order", "pairs"]).agg(
         fps=("fps", "first"), localisation_mm=("localisation_mm", "mean"), localisation_sd_mm=("localisation_mm", "std"),
         force_abs_error_n=("force_abs_error_n", "mean"), val_localisation_mm=("val_localisation_mm", "mean")).reset_index()
-    figure, axis = plt.subplots(figsize=(6, 4))
-    for name, part in summary.groupby("order"):
-        axis.errorbar(part.fps, part.localisation_mm, yerr=part.localisation_sd_mm, marker="o", capsize=3, label=name)
-    axis.set(xscale="log", xlabel="frames per second (333 kHz switching)", ylabel="localisation error (mm)",
-             title=f"{cfg.scene.name}: accuracy vs acquisition time")
-    axis.legend()
-    figure.tight_layout()
-    atomic_write(output_dir / "accuracy_vs_time.png", lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
-    plt.close(figure)
+    figures["accuracy_vs_time"] = _accuracy_vs_time_figure(summary, switching_hz, cfg.scene.name)
+    write_figures(output_dir, figures, logger, prefix="ert")
     atomic_write_text(output_dir / "recruitment.csv", per_iteration.to_csv(index=False))
     atomic_write_text(output_dir / "accuracy_vs_time.csv", table.to_csv(index=False))
     eight = per_iteration[per_iteration.iteration == min(8, len(per_iteration))].iloc[0]
@@ -115,12 +110,25 @@ def run_injection(cfg, output_dir, seeds=(0, 1, 2), max_iterations=300, tie_tole
                "error_reduction_at_94_pairs_pct": float(100 * (1 - np.interp(94, per_iteration.pairs, per_iteration.operator_error))),
                "accuracy_vs_time": summary.round(4).astype(object).where(summary.notna(), None).to_dict(orient="records"),
                "val": {"localisation_mm": float(summary[summary.order == "optimal"].val_localisation_mm.min())}}
-    atomic_write_json(output_dir / "ert_metrics.json", metrics)
     return metrics
 
 
+def _accuracy_vs_time_figure(summary, switching_hz, name):
+    figure, axis = plt.subplots(figsize=(6.4, 4.4))
+    for order, part in summary.groupby("order"):
+        axis.errorbar(part.fps, part.localisation_mm, yerr=part.localisation_sd_mm, marker="o", capsize=3,
+                      label=ORDER_NAMES.get(order, order))
+    axis.set_xscale("log")
+    readable_log_axis(axis, "x")
+    axis.set(xlabel=f"frame rate at {switching_hz / 1e3:g} kHz switching (frames/s), log scale",
+             ylabel="localisation error (mm)", title=f"{name}: localisation error against frame rate")
+    axis.legend(title="injection pairs (mean ± sd over sensors)", fontsize=8, title_fontsize=8)
+    figure.tight_layout()
+    return figure
+
+
 def _figure9(recruitment, electrodes, side_mm, name):
-    figure = plt.figure(figsize=(12, 6.5))
+    figure = plt.figure(figsize=(12, 6.8))
     shown = min(6, len(recruitment.pairs_per_iteration))
     for i in range(shown):
         axis = figure.add_subplot(2, 4, i + 1 + (i >= 3))
@@ -130,15 +138,25 @@ def _figure9(recruitment, electrodes, side_mm, name):
         for a, b in recruitment.pairs_per_iteration[i]:
             axis.plot(*electrodes[[a, b]].T, color="C3", lw=1.2)
         axis.plot(*electrodes.T, "ks", ms=3)
-        axis.set(xlim=(-5, side_mm + 5), ylim=(-5, side_mm + 5), aspect="equal", xticks=[], yticks=[],
-                 title=f"iteration {i + 1}: {recruitment.count_per_iteration[i]} pairs")
+        count = recruitment.count_per_iteration[i]
+        axis.set(xlim=(-5, side_mm + 5), ylim=(-5, side_mm + 5), aspect="equal", xticks=[0, side_mm],
+                 yticks=[0, side_mm], title=f"iteration {i + 1}: {count} pair{'s' if count != 1 else ''} in all")
+        axis.set_xlabel("x (mm)", labelpad=-8, fontsize=8)
+        axis.set_ylabel("y (mm)", labelpad=-14, fontsize=8)
+        axis.tick_params(labelsize=7)
     axis = figure.add_subplot(1, 4, 4)
     iterations = np.arange(1, len(recruitment.error_per_iteration) + 1)
-    axis.plot(iterations, recruitment.error_per_iteration, "C0-o", ms=3, label="operator error (relative)")
-    axis.set(xlabel="iteration", ylabel="relative operator error", xlim=(0, min(len(iterations), 40) + 1))
+    error_line = axis.plot(iterations, recruitment.error_per_iteration, "C0-o", ms=3,
+                           label="operator error (left axis)")
+    axis.set(xlabel="iteration", ylabel="operator error, relative to no pairs (–)",
+             xlim=(0, min(len(iterations), 40) + 1))
     twin = axis.twinx()
-    twin.plot(iterations, recruitment.count_per_iteration, "C1-s", ms=3, label="recruited pairs")
-    twin.set_ylabel("recruited pairs")
-    axis.set_title(f"{name}: fig. 9(b)")
+    count_line = twin.plot(iterations, recruitment.count_per_iteration, "C1-s", ms=3,
+                           label="recruited pairs (right axis)")
+    twin.set_ylabel("recruited pairs (count)")
+    axis.legend(handles=error_line + count_line, loc="center right", fontsize=8)
+    axis.set_title("error and pairs per iteration")
+    figure.suptitle(f"{name}: injection pairs recruited per iteration (red: new; grey: earlier), "
+                    f"as Fig. 9 of {PAPER_NAME}")
     figure.tight_layout()
     return figure

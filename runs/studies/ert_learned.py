@@ -42,7 +42,7 @@ from omegaconf import OmegaConf
 from sklearn.pipeline import make_pipeline
 from sklearn.preprocessing import StandardScaler
 
-from common.atomic import atomic_write_json, atomic_write_text
+from common.atomic import atomic_write_text
 from common.errors import InputError
 from models.resmlp_regressor import ResMLPRegressor
 from models.trees import TreeRegressor
@@ -51,6 +51,7 @@ from models.uncertainty import (
     leave_one_group_out_coverage,
     normalised_scores,
 )
+from runs.report.metrics_file import mean_sd
 from runs.studies.ert_tests import _plain, calibrate, scene_for
 
 FACTORIES = {"extra_trees": lambda seed, **p: TreeRegressor(kind="extra_trees", seed=seed, n_jobs=1, **p),
@@ -117,7 +118,7 @@ def _fit_and_interval(name, params, cfg, seed, X, y, groups, fit, held, X_test, 
     return prediction, held_prediction, lower, upper, loo
 
 
-def run_learned(cfg, output_dir, seeds=(0, 1, 2), n_train=3000, models=None, test_forces_n=(4.0, 8.0, 12.0),
+def run_learned(cfg, output_dir, logger, seeds=(0, 1, 2), n_train=3000, models=None, test_forces_n=(4.0, 8.0, 12.0),
                 coverage=0.95, conformal_fraction=0.2, calibration=None, reconstruction=None,
                 features="voltages", half_width_px=2, recording_presses=None, train_force_range_n=None,
                 train_position_range_mm=(0.0, 200.0), conformal_on="held_out", n_conformal_recordings=5) -> dict:
@@ -174,16 +175,17 @@ def run_learned(cfg, output_dir, seeds=(0, 1, 2), n_train=3000, models=None, tes
                          "val_localisation_mm": _scores(held_prediction + offset[held], train.targets[held])["localisation_mm"],
                          **_coverage(test.targets - offset_test, lower, upper, loo)})
     table = pd.DataFrame(rows)
-    summary = table.drop(columns="seed").groupby("model").agg(["mean", "std"])
-    summary.columns = [f"{a}_{b}" for a, b in summary.columns]
+    # per model, every score as {"mean", "sd"} over seeds
+    summary = {model: {column: mean_sd(part[column].dropna()) for column in table.columns
+                       if column not in ("seed", "model") and part[column].notna().any()}
+               for model, part in table.groupby("model", sort=False)}
     atomic_write_text(output_dir / "learned_vs_tikhonov.csv", table.to_csv(index=False))
     best = min((m for m in models), key=lambda m: table[table.model == m].val_localisation_mm.mean())
     metrics = {"scene": cfg.scene.name, "seeds": list(seeds), "n_train": n_train, "features": features,
                "conformal_on": conformal_on,
                "n_conformal_recordings": int(n_conformal_recordings) if conformal_on == "calibration_recordings" else None,
                "recording_presses": recording_presses,
-               "summary": summary.round(4).astype(object).where(summary.notna(), None).reset_index().to_dict(orient="records"),
+               "summary": summary,
                "best_on_validation": best,
                "val": {"localisation_mm": float(table[table.model == best].val_localisation_mm.mean())}}
-    atomic_write_json(output_dir / "ert_metrics.json", metrics)
     return metrics

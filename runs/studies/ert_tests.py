@@ -1,4 +1,5 @@
-"""Study runs for the ERT skin (seed 002 §5): the paper's three tests, on the scene in `cfg.scene`.
+"""Study runs for the ERT skin: the three tests of the ERT internal-electrode study (§5), on the
+scene in `cfg.scene`.
 
     python train.py experiment=ert_localisation scene=ert_internal      (and scene=ert_boundary)
     python train.py experiment=ert_force scene=ert_internal
@@ -28,12 +29,16 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, ListConfig, OmegaConf
 from scipy import stats
 
-from common.atomic import atomic_write, atomic_write_json, atomic_write_text
+from common.atomic import atomic_write_text
 from models.tikhonov_reconstruction import TikhonovReconstruction
+from runs.report.figure_files import write_figures
+from runs.report.plots import panel_grid
+from runs.report.metrics_file import mean_sd
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+PAPER_NAME = "the ERT internal-electrode study"   # our copy has no title, authors or venue
 PAPER = {
     "ert_internal": {"localisation_mm": [8.13, 4.32], "force_error_n": [2.00, 1.18], "force_r": 0.983,
                      "loq_kpa": [49.38, 20.25], "two_point_mm": "35 (edge) - 55 (centre)"},
@@ -68,11 +73,6 @@ def limit_of_quantification(cfg, seed, model, n_blank: int) -> dict:
     return {"loq_n": 10.0 * sd, "loq_kpa": 10.0 * sd / area_mm2 * 1e3}
 
 
-def _mean_sd(values) -> list:
-    values = np.asarray(values, dtype=float)
-    return [float(values.mean()), float(values.std(ddof=1)) if len(values) > 1 else 0.0]
-
-
 def single_point_study(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None,
                        test_forces_n=(10.0,), n_blank=100) -> tuple[pd.DataFrame, dict]:
     """Presses on the 18 x 18 grid at `test_forces_n` for every seed: a frame of predictions."""
@@ -94,9 +94,9 @@ def single_point_study(cfg, output_dir, seeds=(0, 1, 2), calibration=None, recon
     return pd.concat(rows, ignore_index=True), {"loq": loq, "val_localisation_mm": val}
 
 
-def run_localisation(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None, test_force_n=10.0,
+def run_localisation(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, reconstruction=None, test_force_n=10.0,
                      n_blank=100) -> dict:
-    """Single-point localisation (seed 002 §5.1, fig. 12): error of the field's peak, presses
+    """Single-point localisation (the ERT study's §5.1, fig. 12): error of the field's peak, presses
     above the limit of quantification only."""
     output_dir = Path(output_dir)
     frame, extra = single_point_study(cfg, output_dir, seeds, calibration, reconstruction, (test_force_n,), n_blank)
@@ -105,26 +105,25 @@ def run_localisation(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconst
     used = frame[frame.above_loq]
     per_seed = used.groupby("seed").error_mm.agg(["mean", "std"])
     metrics = {"scene": cfg.scene.name, "seeds": list(seeds),
-               "localisation_mm_per_seed": per_seed.round(3).values.tolist(),
-               "localisation_mm": _mean_sd(per_seed["mean"]),           # mean (over seeds) of per-seed means
-               "localisation_sd_mm": _mean_sd(per_seed["std"]),
+               "localisation_mm_per_seed": [{"seed": int(s), "mean": float(r["mean"]), "sd": float(r["std"])}
+                                            for s, r in per_seed.iterrows()],
+               "localisation_mm": mean_sd(per_seed["mean"]),           # mean (over seeds) of per-seed means
+               "localisation_sd_mm": mean_sd(per_seed["std"]),
                "presses_used": len(used), "presses": len(frame),
-               "loq_kpa": _mean_sd([r["loq_kpa"] for r in extra["loq"]]),
+               "loq_kpa": mean_sd([r["loq_kpa"] for r in extra["loq"]]),
                "alpha_relative": [r["alpha_relative"] for r in extra["loq"]],
                "paper": PAPER.get(cfg.scene.name, {}),
                "val": {"localisation_mm": float(np.mean(extra["val_localisation_mm"]))}}
     electrodes = OmegaConf.to_container(cfg.scene.electrodes_mm, resolve=True)
     figure = _error_map(frame[frame.seed == seeds[0]], cfg.scene.side_mm, electrodes, metrics)
-    atomic_write(output_dir / "localisation_map.png", lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
-    plt.close(figure)
+    write_figures(output_dir, {"localisation_map": figure}, logger, prefix="ert")
     atomic_write_text(output_dir / "localisation.csv", frame.to_csv(index=False))
-    atomic_write_json(output_dir / "ert_metrics.json", metrics)
     return metrics
 
 
-def run_force(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None,
+def run_force(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, reconstruction=None,
               test_forces_n=(4.0, 8.0, 12.0), n_blank=100) -> dict:
-    """Force estimation (seed 002 §5.3, fig. 14): the field's integral against the reference."""
+    """Force estimation (the ERT study's §5.3, fig. 14): the field's integral against the reference."""
     output_dir = Path(output_dir)
     frame, extra = single_point_study(cfg, output_dir, seeds, calibration, reconstruction, test_forces_n, n_blank)
     per_seed = []
@@ -135,37 +134,22 @@ def run_force(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction
                          "r": float(np.corrcoef(part.force_n, part.force_pred_n)[0, 1])})
     table = pd.DataFrame(per_seed)
     metrics = {"scene": cfg.scene.name, "seeds": list(seeds), "test_forces_n": list(test_forces_n),
-               "force_error_n": _mean_sd(table.abs_error_n), "force_error_sd_n": _mean_sd(table.abs_error_sd_n),
-               "rmse_n": _mean_sd(table.rmse_n), "r": _mean_sd(table.r),
-               "loq_kpa": _mean_sd([r["loq_kpa"] for r in extra["loq"]]),
-               "per_reference_force": frame.groupby("force_n").force_pred_n.agg(["mean", "std"]).round(3).reset_index().values.tolist(),
+               "force_error_n": mean_sd(table.abs_error_n), "force_error_sd_n": mean_sd(table.abs_error_sd_n),
+               "rmse_n": mean_sd(table.rmse_n), "r": mean_sd(table.r),
+               "loq_kpa": mean_sd([r["loq_kpa"] for r in extra["loq"]]),
+               "per_reference_force": [{"force_n": float(f), "estimated_n": {"mean": float(r["mean"]), "sd": float(r["std"])}}
+                                       for f, r in frame.groupby("force_n").force_pred_n.agg(["mean", "std"]).iterrows()],
                "paper": PAPER.get(cfg.scene.name, {}),
                "val": {"localisation_mm": float(np.mean(extra["val_localisation_mm"]))}}
-    figure, axes = plt.subplots(1, 2, figsize=(10, 4.2))
-    first = frame[frame.seed == seeds[0]]
-    rmse_map = first.groupby(["x_mm", "y_mm"]).force_error_n.apply(lambda e: np.sqrt((e ** 2).mean())).reset_index()
-    sc = axes[0].scatter(rmse_map.x_mm, rmse_map.y_mm, c=rmse_map.force_error_n, s=40, cmap="viridis", marker="s")
-    figure.colorbar(sc, ax=axes[0], label="force RMSE (N)")
-    axes[0].set(xlabel="x (mm)", ylabel="y (mm)", title=f"{cfg.scene.name}: RMSE per point (seed {seeds[0]})",
-                aspect="equal")
-    axes[1].errorbar(*frame.groupby("force_n").force_pred_n.agg(["mean", "std"]).reset_index().values.T, fmt="o",
-                     capsize=4, label="estimated (mean +- sd)")
-    limits = [0, max(test_forces_n) * 1.3]
-    axes[1].plot(limits, limits, "k--", lw=1, label="ideal")
-    axes[1].set(xlabel="reference force (N)", ylabel="estimated force (N)",
-                title=f"r = {metrics['r'][0]:.3f}, |error| = {metrics['force_error_n'][0]:.2f} N")
-    axes[1].legend()
-    figure.tight_layout()
-    atomic_write(output_dir / "force.png", lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
-    plt.close(figure)
+    figure = _force_figure(frame, seeds[0], cfg.scene.name, metrics["r"]["mean"], metrics["force_error_n"]["mean"])
+    write_figures(output_dir, {"force": figure}, logger, prefix="ert")
     atomic_write_text(output_dir / "force.csv", frame.to_csv(index=False))
-    atomic_write_json(output_dir / "ert_metrics.json", metrics)
     return metrics
 
 
-def run_two_point(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None, n_repeats=10,
+def run_two_point(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, reconstruction=None, n_repeats=10,
                   significance=0.05) -> dict:
-    """Two-point discrimination (seed 002 §5.2, table 2) with the paired dip test (module docstring)."""
+    """Two-point discrimination (the ERT study's §5.2, table 2) with the paired dip test (module docstring)."""
     output_dir = Path(output_dir)
     tables, distances = [], {}
     for seed in seeds:
@@ -207,12 +191,33 @@ def run_two_point(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruc
                "p_table_seed0": {int(k): {float(d): float(p) for d, p in row.items()} for k, row in pivot.iterrows()},
                "paper": PAPER.get(cfg.scene.name, {})}
     atomic_write_text(output_dir / "two_point.csv", table.to_csv(index=False))
-    atomic_write_json(output_dir / "ert_metrics.json", metrics)
     return metrics
 
 
+def _force_figure(frame, seed, scene_name, r, abs_error_n):
+    """The force RMSE over the sheet for one simulated sensor, and the estimated against the
+    reference force over all of them."""
+    figure, axes = panel_grid(2, panel_width=5.2, panel_height=4.4)
+    first = frame[frame.seed == seed]
+    rmse_map = first.groupby(["x_mm", "y_mm"]).force_error_n.apply(lambda e: np.sqrt((e ** 2).mean())).reset_index()
+    sc = axes[0].scatter(rmse_map.x_mm, rmse_map.y_mm, c=rmse_map.force_error_n, s=40, cmap="viridis", marker="s")
+    figure.colorbar(sc, ax=axes[0], label="force RMSE over the reference forces (N)")
+    axes[0].set(xlabel="press x (mm)", ylabel="press y (mm)", aspect="equal",
+                title=f"RMSE per press point, simulated sensor seed={seed}")
+    axes[1].errorbar(*frame.groupby("force_n").force_pred_n.agg(["mean", "std"]).reset_index().values.T, fmt="o",
+                     capsize=4, label="estimated (mean ± sd over presses)")
+    limits = [0, frame.force_n.max() * 1.3]
+    axes[1].plot(limits, limits, "k--", lw=1, label="estimated = reference")
+    axes[1].set(xlabel="reference force (N)", ylabel="estimated force (N)",
+                title=f"all sensors: r = {r:.3f}, mean |error| = {abs_error_n:.2f} N")
+    axes[1].legend(fontsize=8)
+    figure.suptitle(f"{scene_name}: force from the reconstructed pressure field (as Fig. 14 of {PAPER_NAME})")
+    figure.tight_layout()
+    return figure
+
+
 def _error_map(frame, side_mm, electrodes_mm, metrics):
-    figure, axis = plt.subplots(figsize=(5.6, 5.6))
+    figure, axis = plt.subplots(figsize=(5.8, 6.4))
     axis.scatter(frame.x_mm, frame.y_mm, s=14, facecolors="none", edgecolors="k", lw=0.7, label="true")
     for _, row in frame.iterrows():
         axis.plot([row.x_mm, row.x_pred_mm], [row.y_mm, row.y_pred_mm], "r-", lw=0.7)
@@ -220,8 +225,9 @@ def _error_map(frame, side_mm, electrodes_mm, metrics):
     xy = np.asarray(electrodes_mm, dtype=float)
     axis.plot(xy[:, 0], xy[:, 1], "bs", ms=5, label="electrodes")
     axis.set(xlim=(-5, side_mm + 5), ylim=(-5, side_mm + 5), aspect="equal", xlabel="x (mm)", ylabel="y (mm)",
-             title=f"{metrics['scene']}, map of seed {int(frame.seed.iloc[0])}: "
-                   f"{frame.error_mm.mean():.2f} +- {frame.error_mm.std():.2f} mm")
-    axis.legend(loc="upper right", fontsize=7)
+             title=f"{metrics['scene']}, simulated sensor seed={int(frame.seed.iloc[0])}: localisation error\n"
+                   f"{frame.error_mm.mean():.2f} ± {frame.error_mm.std():.2f} mm (as Fig. 12 of {PAPER_NAME})")
+    axis.title.set_fontsize(9)
+    axis.legend(loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=3, fontsize=8)
     figure.tight_layout()
     return figure

@@ -1,4 +1,5 @@
-"""Study run `taxel_receptive_field`: seed 004's Fig. 2 and Fig. 4 from the taxels scene.
+"""Study run `taxel_receptive_field`: Fig. 2 and Fig. 4 of *Effects of the elastic cover on tactile
+sensor arrays* (the taxels paper) from the taxels scene.
 
     python train.py experiment=taxel_receptive_field
 
@@ -10,10 +11,9 @@ amplitude A (|eps_z| under the load) against cover thickness, for each cover mod
 paper's measured laws beside them (its text gives the fitted slope of W, 1.14, and the exponent
 of A, -1.45, not the points; the lines are drawn through the model's value at the middle
 thickness so only their slopes compare). Writes receptive_field.png, thickness.png, the same
-figures to TensorBoard, profiles.csv, thickness.csv and receptive_field.json (the fitted slopes and
-exponents it also returns; no "val" key: nothing here is a validation score).
+figures to TensorBoard, profiles.csv and thickness.csv; the fitted slopes and exponents it
+returns go to metrics.json (no "val" key: nothing here is a validation score).
 """
-import json
 from pathlib import Path
 
 import matplotlib
@@ -22,8 +22,9 @@ import pandas as pd
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
-from common.atomic import atomic_write, atomic_write_text
-from runs.report.tensorboard_logger import TensorBoardLogger
+from common.atomic import atomic_write_text
+from runs.report.figure_files import write_figures
+from runs.report.plots import panel_grid, readable_log_axis
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -39,7 +40,7 @@ def _crossing(x, y, index_from, index_to):
 
 
 def profile_metrics(x_mm, eps_z, centre_mm) -> dict:
-    """Seed 004 eq. (3)-(4) measured on a sampled eps_z(x) profile around a taxel at `centre_mm`.
+    """The taxels paper's eq. (3)-(4) measured on a sampled eps_z(x) profile around a taxel at `centre_mm`.
 
     amplitude: |eps_z| at its compressive peak; zero_crossing_mm: mean distance of the first sign
     changes either side of the peak; width_mm: distance between them (W; nan when eps_z never
@@ -109,7 +110,7 @@ def _needle_profile(cfg, effects, thickness_um, n_points, force_mn):
     return table.frame["x_mm"].to_numpy(), strain, centre
 
 
-def run_receptive_field(cfg, output_dir, models: dict, thickness_um: list, fig2_thickness_um: float = 180.0,
+def run_receptive_field(cfg, output_dir, logger, models: dict, thickness_um: list, fig2_thickness_um: float = 180.0,
                         n_points: int = 1201, force_mn: float = 10.0) -> dict:
     """The study (module docstring). `models`: label -> effects mapping of the taxels scene."""
     output_dir = Path(output_dir)
@@ -140,62 +141,65 @@ def run_receptive_field(cfg, output_dir, models: dict, thickness_um: list, fig2_
         metrics[label] = {**laws, "ratio_fig2": float(fig2.ratio), "width_fig2_mm": float(fig2.width_mm),
                           "amplitude_fig2": float(fig2.amplitude)}
 
-    figures = {"receptive_field": _profile_figure(profiles, fig2_thickness_um),
+    figures = {"receptive_field": _profile_figure(profiles, fig2_thickness_um, force_mn),
                "thickness": _thickness_figure(table[~table.fig2], metrics)}
-    with TensorBoardLogger(str(output_dir / "tensorboard")) as logger:
-        for name, figure in figures.items():
-            logger.log_figure(f"taxels/{name}", figure)
-        for label in models:
-            for key, value in metrics[label].items():
-                logger.writer_.add_scalar(f"taxels/{label}/{key}", value)
-    for name, figure in figures.items():
-        atomic_write(output_dir / f"{name}.png", lambda tmp, f=figure: f.savefig(tmp, dpi=110, format="png"))
-        plt.close(figure)
-    finite = {model: {key: (value if np.isfinite(value) else None) for key, value in row.items()}
-              for model, row in metrics.items()}  # strict JSON: no NaN or Infinity (null: not defined)
-    atomic_write_text(output_dir / "receptive_field.json", json.dumps(finite, indent=2))
+    write_figures(output_dir, figures, logger, prefix="taxels")
     atomic_write_text(output_dir / "thickness.csv", table.to_csv(index=False))
     atomic_write_text(output_dir / "profiles.csv", profiles.to_csv(index=False))
     return metrics
 
 
-def _profile_figure(profiles, thickness_um):
+PAPER_TITLE = "“Effects of the elastic cover on tactile sensor arrays”"
+COMPONENTS = {"gamma_x": ("γx (shear)", "-"), "gamma_y": ("γy (shear)", ":"), "eps_z": ("εz (normal)", "-")}
+
+
+def _profile_figure(profiles, thickness_um, force_mn):
     labels = list(dict.fromkeys(profiles.model))
-    figure, axes = plt.subplots(1, len(labels), figsize=(4.2 * len(labels), 3.4), squeeze=False)
-    for ax, label in zip(axes[0], labels):
+    figure, axes = panel_grid(len(labels), panel_width=3.4, panel_height=2.7)
+    for ax, label in zip(axes, labels):
         p = profiles[profiles.model == label]
-        for component, style in (("gamma_x", "-"), ("gamma_y", ":"), ("eps_z", "-")):
-            ax.plot(p.x_mm, p[component], style, label=component)
+        for component, (name, style) in COMPONENTS.items():
+            ax.plot(p.x_mm, p[component], style, label=name)
         ax.axhline(0.0, color="grey", lw=0.5)
-        ax.set_title(f"{label} ({thickness_um:.0f} um cover)", fontsize=9)
-        ax.set_xlabel("needle x - taxel x (mm)")
-    axes[0, 0].set_ylabel("strain at the taxel (eq. 2)")
-    axes[0, 0].legend(fontsize=8)
-    figure.suptitle("Seed 004 Fig. 2: a 10 mN needle scanned over a taxel", fontsize=10)
+        ax.set_title(f"cover model {label}", fontsize=9)
+        ax.tick_params(labelsize=8)
+    axes[0].legend(fontsize=7, title="strain", title_fontsize=7)
+    figure.supxlabel("needle position relative to the taxel, x (mm)", fontsize=10)
+    figure.supylabel("strain read back through eq. 2 (–)", fontsize=10)
+    figure.suptitle(f"Fig. 2 of {PAPER_TITLE}: a {force_mn:g} mN needle scanned over a taxel "
+                    f"under a {thickness_um:.0f} µm cover", fontsize=11)
     figure.tight_layout()
     return figure
 
 
 def _thickness_figure(table, metrics):
-    figure, (ax_w, ax_a) = plt.subplots(1, 2, figsize=(9.5, 3.8))
+    figure, (ax_w, ax_a) = panel_grid(2, panel_width=5.6, panel_height=6.4)
     for label in dict.fromkeys(table.model):
         t = table[table.model == label]
-        ax_w.plot(t.thickness_um, t.width_mm, "o-", ms=3, label=f"{label} (slope {metrics[label]['w_slope']:.2f})")
-        ax_a.loglog(t.thickness_um, t.amplitude, "o-", ms=3, label=f"{label} (exp {metrics[label]['a_exponent']:.2f})")
+        slope, exponent = (f"{v:.2f}" if np.isfinite(v) else "not defined"
+                           for v in (metrics[label]["w_slope"], metrics[label]["a_exponent"]))
+        ax_w.plot(t.thickness_um, t.width_mm, "o-", ms=3, label=f"{label} (slope {slope})")
+        ax_a.loglog(t.thickness_um, t.amplitude, "o-", ms=3, label=f"{label} (exponent {exponent})")
     z = np.asarray(sorted(set(table.thickness_um)))
     middle = z[len(z) // 2]
     first = table[table.model == table.model.iloc[0]].set_index("thickness_um")
     if np.isfinite(first.width_mm.get(middle, np.nan)):
         w_mid = first.width_mm[middle]
-        ax_w.plot(z, w_mid + PAPER["w_slope"] * (z - middle) * 1e-3, "k--", label="paper: slope 1.14")
+        ax_w.plot(z, w_mid + PAPER["w_slope"] * (z - middle) * 1e-3, "k--",
+                  label=f"the paper's slope, {PAPER['w_slope']:.2f}")
     a_mid = first.amplitude[middle]
-    ax_a.loglog(z, a_mid * (z / middle) ** PAPER["a_exponent"], "k--", label="paper: z^-1.45")
-    ax_w.set_xlabel("cover thickness (um)")
-    ax_w.set_ylabel("W, width between zero crossings (mm)")
-    ax_a.set_xlabel("cover thickness (um)")
-    ax_a.set_ylabel("A = |eps_z| under the load")
-    ax_w.legend(fontsize=7)
-    ax_a.legend(fontsize=7)
-    figure.suptitle("Seed 004 Fig. 4: receptive field against cover thickness", fontsize=10)
+    ax_a.loglog(z, a_mid * (z / middle) ** PAPER["a_exponent"], "k--",
+                label=f"the paper's exponent, {PAPER['a_exponent']:.2f}")
+    readable_log_axis(ax_a, "x")
+    readable_log_axis(ax_a, "y")
+    ax_w.set(xlabel="cover thickness (µm)", ylabel="width W between the zero crossings of εz (mm)",
+             title="receptive field width W")
+    ax_a.set(xlabel="cover thickness (µm), log scale", ylabel="amplitude A = |εz| under the load (–), log scale",
+             title="amplitude A")
+    for ax, law in ((ax_w, "W against thickness: fitted slope"), (ax_a, "A against thickness: fitted exponent")):
+        ax.legend(fontsize=7, loc="upper center", bbox_to_anchor=(0.5, -0.13), ncol=2, title=f"cover model ({law})",
+                  title_fontsize=7)
+    figure.suptitle(f"Fig. 4 of {PAPER_TITLE}:\nthe receptive field against cover thickness "
+                    "(the paper's lines drawn through the first model's middle point)", fontsize=11)
     figure.tight_layout()
     return figure
