@@ -69,7 +69,7 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
     events = EventAccumulator(str(tmp_path / "tensorboard")).Reload()
     scalars = events.Tags()["scalars"]
     assert "test/x_mm/r2" in scalars and "cost/fit_time_s" in scalars
-    assert set(events.Tags()["images"]) == {f"{f}/test" for f in figures}
+    assert set(events.Tags()["images"]) == {f"figures/{f}" for f in figures}
     if model in ("resmlp", "blend"):
         losses = events.Scalars("loss/train")
         assert [e.step for e in losses] == list(range(1, len(losses) + 1)) and len(losses) >= 2

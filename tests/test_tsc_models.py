@@ -77,7 +77,7 @@ def test_a_tiny_training_run_on_the_fingertip_beats_chance(compose_config, tmp_p
     assert (tmp_path / "confusion.png").stat().st_size > 0 and (tmp_path / "confusion_test.png").stat().st_size > 0
     events = EventAccumulator(str(tmp_path / "tensorboard")).Reload()
     assert len(events.Scalars("accuracy/val")) == 6
-    assert {"confusion/val", "confusion/test"} <= set(events.Tags()["images"])
+    assert {"figures/confusion", "figures/confusion_test"} <= set(events.Tags()["images"])
     assert events.Scalars("final/test_accuracy")[0].value == pytest.approx(metrics["test"]["accuracy"])
     hparams = EventAccumulator(str(tmp_path / "tensorboard" / "hparams")).Reload()
     assert {"hparam/val_accuracy", "hparam/test_accuracy"} <= set(hparams.Tags()["scalars"])

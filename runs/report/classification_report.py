@@ -11,11 +11,12 @@ import pandas as pd
 from common.atomic import atomic_write
 from models.deployable import PIPELINE_FILE, save_pipeline
 from runs.report import plots
+from runs.report.figure_files import write_figures
 
 log = logging.getLogger(__name__)
 
 SPLIT_NAMES = {"val": "validation", "test": "test"}
-FIGURE_FILES = {"val": "confusion.png", "test": "confusion_test.png"}  # confusion.png keeps its old name
+FIGURE_NAMES = {"val": "confusion", "test": "confusion_test"}  # confusion.png: validation
 
 
 def _split_frame(classes, split, recording, y_true, proba, levels) -> pd.DataFrame:
@@ -36,9 +37,8 @@ def write_classification_report(result, output_dir, logger) -> None:
     figures = {}
     for split in ("val", "test"):
         scores = metrics[split]
-        figures[split] = plots.confusion_figure(np.asarray(scores["confusion_matrix"]), result.classes,
+        figures[FIGURE_NAMES[split]] = plots.confusion_figure(np.asarray(scores["confusion_matrix"]), result.classes,
                                                 f"{metrics['model']}: {SPLIT_NAMES[split]} accuracy {scores['accuracy']:.3f}")
-        logger.log_figure(f"confusion/{split}", figures[split])
         for name in ("accuracy", "macro_f1", "loss"):
             logger.writer_.add_scalar(f"final/{split}_{name}", scores[name])
     logger.writer_.add_scalar("cost/fit_time_s", metrics["fit_time_s"])
@@ -52,9 +52,7 @@ def write_classification_report(result, output_dir, logger) -> None:
         _split_frame(classes, "test", result.test_window_recording, result.y_test, result.proba_test, result.test_levels),
     ], ignore_index=True)
     atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
-    for split, figure in figures.items():
-        atomic_write(output_dir / FIGURE_FILES[split], lambda tmp, fig=figure: fig.savefig(tmp, dpi=110, format="png"))
-        plots.plt.close(figure)
+    write_figures(output_dir, figures, logger)
     save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
     val, test = metrics["val"], metrics["test"]
     log.info("%s (%d parameters) fitted in %.1f s: validation accuracy %.4f (macro-F1 %.4f, loss %.4f, by level %s); "

@@ -13,6 +13,7 @@ from common.atomic import atomic_write
 from models.deployable import PIPELINE_FILE, save_pipeline
 from runs.report import plots
 from runs.report.analysis import format_ablation
+from runs.report.figure_files import write_figures
 from runs.report.metrics import format_table
 
 log = logging.getLogger(__name__)
@@ -42,8 +43,6 @@ def _log_to_tensorboard(logger, result, figures) -> None:
         if split.startswith("coverage_"):
             for target, value in values.items():
                 logger.writer_.add_scalar(f"uncertainty/{split}/{target}", value)
-    for name, figure in figures.items():
-        logger.log_figure(f"{name}/test", figure)
     logger.log_hparams(result.hparams, {"hparam/val_r2": metrics["val"]["average"]["r2"],
                                         "hparam/test_r2": metrics["test"]["average"]["r2"],
                                         "hparam/fit_time_s": metrics["fit_time_s"]})
@@ -88,8 +87,6 @@ def write_regression_report(result, output_dir, logger, feature_names) -> None:
     _log_to_tensorboard(logger, result, figures)
     frame = _predictions_frame(result)
     atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
-    for name, figure in figures.items():
-        atomic_write(output_dir / f"{name}.png", lambda tmp, f=figure: f.savefig(tmp, dpi=110, format="png"))
-        plots.plt.close(figure)
+    write_figures(output_dir, figures, logger)
     save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
     _log_summary(result.metrics, output_dir)
