@@ -1,4 +1,4 @@
-"""The tracker's view of a stream as the paper shows it (seed 001, Fig. 13-14): a heatmap of the
+"""The tracker's view of a stream as Egger et al. 2025 show it (Figs. 13-14): a heatmap of the
 load above the rest mean with each contact's id written on its cells and the cells below
 threshold black, beside one time-series panel per contact (its peak load over time, a cursor at
 the current frame). Written as an animated GIF (matplotlib's PillowWriter) and one PNG frame.
@@ -31,9 +31,10 @@ def _panel_contacts(contacts: pd.DataFrame, frames: np.ndarray, busiest: int, n_
 
 
 def _figure(load: np.ndarray, n_panels: int, pitch_mm: float):
+    """The heatmap, and beside it one time-series panel per shown contact (none: the heatmap alone)."""
     rows, cols = load.shape[1:]
-    figure = plt.figure(figsize=(7.2, 3.6), dpi=64)
-    grid = figure.add_gridspec(max(n_panels, 1), 2, width_ratios=[1.15, 1.0])
+    figure = plt.figure(figsize=(8.0, 3.8) if n_panels else (4.6, 3.8), dpi=64)
+    grid = figure.add_gridspec(max(n_panels, 1), 2 if n_panels else 1, width_ratios=[1.15, 1.0] if n_panels else None)
     heat = figure.add_subplot(grid[:, 0])
     panels = [figure.add_subplot(grid[i, 1]) for i in range(n_panels)]
     colours = plt.get_cmap("Reds")(np.linspace(0.08, 1.0, 256))
@@ -64,16 +65,19 @@ def write_contact_animation(load: np.ndarray, shown: np.ndarray, labels: np.ndar
     busiest = int(frames[np.argmax(per_frame[frames])]) if len(frames) else 0
     ids = _panel_contacts(contacts, frames, busiest, n_panels)
     series = {i: contacts[contacts.id == i].set_index("frame").peak_load.reindex(range(n)) for i in ids}
-    figure, heat, image, panels = _figure(load, max(len(ids), 1), pitch_mm)
+    figure, heat, image, panels = _figure(load, len(ids), pitch_mm)
     time_s = np.arange(n) / frame_rate_hz
     cursors = []
     for axis, i in zip(panels, ids):
         axis.plot(time_s[frames], series[i].to_numpy()[frames], color="tab:red", lw=1.2)
-        axis.set_ylabel(f"id {i}\npeak", fontsize=8)
+        axis.set_ylabel(f"contact {i}:\npeak load\n(RMC counts)", fontsize=7)
         axis.tick_params(labelsize=7)
         axis.set_xlim(time_s[frames[0]], time_s[frames[-1]])
         cursors.append(axis.axvline(time_s[frames[0]], color="k", lw=0.8))
     if panels:
+        panels[0].set_title("each contact's peak load over time", fontsize=9)
+        for axis in panels[:-1]:
+            axis.tick_params(labelbottom=False)   # one time axis, named under the last panel
         panels[-1].set_xlabel("time (s)")
     texts = []
 

@@ -166,14 +166,14 @@ def markdown(summary: pd.DataFrame, jobs: pd.DataFrame, parallel_warning: bool) 
 
 
 def figure(summary: pd.DataFrame):
-    import matplotlib
-    import matplotlib.ticker
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from runs.report.plots import panel_grid, readable_log_axis
 
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
-    for ax, cost, front, title in ((axes[0], "fit_time_s", "pareto_fit_time", "fit time (s)"),
-                                   (axes[1], "latency_p50_us", "pareto_latency", "batch-1 latency p50 (µs)")):
+    metric = summary["score_metric"].iloc[0]
+    costs = [(cost, front, title) for cost, front, title in (
+        ("fit_time_s", "pareto_fit_time", "fit time (s)"), ("latency_p50_us", "pareto_latency", "batch-1 latency p50 (µs)"))
+        if np.isfinite(summary[f"{cost}_mean"].astype(float)).any()]   # no latency measured: no empty panel
+    fig, axes = panel_grid(len(costs), panel_width=6.5, panel_height=5.0)
+    for ax, (cost, front, title) in zip(axes, costs):
         points = summary[np.isfinite(summary[f"{cost}_mean"].astype(float))]
         ax.errorbar(points[f"{cost}_mean"], points["val_score_mean"], yerr=points["val_score_sd"].fillna(0),
                     fmt="o", color="tab:blue", zorder=3, label="validation (mean ± sd over seeds)")
@@ -183,8 +183,9 @@ def figure(summary: pd.DataFrame):
             ax.annotate(r["label"], (r[f"{cost}_mean"], r["val_score_mean"]), fontsize=6, xytext=(3, 3),
                         textcoords="offset points")
         ax.set_xscale("log")
-        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
-        ax.set(xlabel=title + " (log)", ylabel="validation score", title=f"validation score vs {title}")
+        readable_log_axis(ax, "x")
+        ax.set(xlabel=f"{title}, log scale", ylabel=f"validation {metric} (–)",
+               title=f"Validation {metric.split(' (')[0]} against {title.split(' (')[0]}")
         ax.legend(loc="lower right", fontsize=7)
     fig.tight_layout()
     return fig
