@@ -119,54 +119,42 @@ def as_input_error(error: InstantiationException) -> Exception:
     return error
 
 
-def check_overrides(argv: list[str]) -> None:
-    """Compose the config once up front so that an unknown option or key (also one added with `+`
-    that its target does not take), a malformed override, a missing mandatory value, or a setting
-    of the wrong type or out of range (runs/config_checks.py: threads, seed, trainer.*, splits,
-    our components' parameters) is one line and exit code 2 like every other input error (Hydra
-    would print a multi-line message and exit 1, torch a traceback), in about a second. Sweeps
-    and Hydra's own flags are left to Hydra; runs/run.py checks each job's config."""
-    if any(arg.startswith("-") for arg in argv):
-        return
-    try:
-        with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
-            cfg = compose(config_name="config", overrides=argv)
-        check_config(cfg)  # its warnings are logged by the run itself, once
-    except InputError as error:
-        print(f"error: {error}", file=sys.stderr)
-        sys.exit(2)
-    except Exception as error:  # Hydra's and OmegaConf's composition errors
-        message = " ".join(str(error).split("Config search path")[0].split())
-        print(f"error: {message}", file=sys.stderr)
-        sys.exit(2)
-
-
-def check_run_folder(argv: list[str]) -> None:
-    """The folder this command will write into (hydra.run.dir, or hydra.sweep.dir for a sweep)
-    must hold nothing from an earlier run, or one folder would mix two runs' files: checked here,
-    before Hydra writes .hydra/ and train.log into it, and refused in one line with exit code 2,
-    or cleared with overwrite=true (common/run_status.py). The default folders, named by time and
-    process id, are new. Hydra's other flags (--help, --cfg, ...) write no folder."""
+def preflight(argv: list[str]) -> None:
+    """Compose the command's configuration once, before Hydra starts, so that a mistake is one
+    line and exit code 2 in about a second (Hydra would print a multi-line message and exit 1,
+    torch a traceback): an unknown option or key (also one added with `+` that its target does
+    not take), a malformed override, a missing value, or a setting of the wrong type or out of
+    range (runs/config_checks.py). The same composition names the folder this command will
+    write into (hydra.run.dir, or hydra.sweep.dir for a sweep), which must hold nothing from an
+    earlier run, or one folder would mix two runs' files: refused in one line, or cleared with
+    overwrite=true (common/run_status.py), before Hydra writes .hydra/ and train.log into it.
+    A sweep's axes are left to Hydra (runs/run.py checks each job's config); Hydra's other flags
+    (--help, --cfg, ...) run nothing."""
     flags = {arg for arg in argv if arg.startswith("-")}
     if flags - {"-m", "--multirun"}:
         return
     try:
         overrides = OverridesParser.create().parse_overrides([arg for arg in argv if not arg.startswith("-")])
+        sweep = bool(flags) or any(o.is_sweep_override() for o in overrides)
         with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
             cfg = compose(config_name="config", return_hydra_config=True,  # a sweep's folder does not depend on its axes
                           overrides=[o.input_line for o in overrides if not o.is_sweep_override()])
-        setting = "hydra.sweep.dir" if flags or cfg.hydra.mode == RunMode.MULTIRUN else "hydra.run.dir"
-        folder = Path(OmegaConf.select(cfg, setting))
-    except Exception:  # a malformed sweep or config: Hydra reports it before it makes a folder
-        return
-    try:
-        prepare_folder(folder, setting, bool(cfg.overwrite))
+        sweep = sweep or cfg.hydra.mode == RunMode.MULTIRUN
+        if not sweep:
+            check_config(cfg)  # its warnings are logged by the run itself, once
+        setting = "hydra.sweep.dir" if sweep else "hydra.run.dir"
+        prepare_folder(Path(OmegaConf.select(cfg, setting)), setting, bool(cfg.overwrite))
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
+        sys.exit(2)
+    except Exception as error:  # Hydra's and OmegaConf's composition and override-parsing errors
+        if flags:
+            return  # a sweep: Hydra reports its own errors before it makes a folder
+        message = " ".join(str(error).split("Config search path")[0].split())
+        print(f"error: {message}", file=sys.stderr)
         sys.exit(2)
 
 
 if __name__ == "__main__":
-    check_overrides(sys.argv[1:])
-    check_run_folder(sys.argv[1:])
+    preflight(sys.argv[1:])
     main()
