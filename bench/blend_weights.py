@@ -1,4 +1,4 @@
-"""The seed's validation weights vs stacking, beside each candidate alone, over several seeds.
+"""The rubber12 paper's validation weights vs stacking, beside each candidate alone, over several seeds.
 
     .venv/bin/python bench/blend_weights.py [--seeds 0 1 2] [overrides ...]
     (default overrides: scene.protocol=random scene.n_samples=2000)

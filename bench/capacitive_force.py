@@ -1,5 +1,5 @@
 """Force-from-capacitance table of a `experiment=capacitive_force` multirun: per model, mean ± sd over
-seeds of the test R^2 and RMSE of force_n and of the correlation factor (seed 001's slope: pressed
+seeds of the test R^2 and RMSE of force_n and of the correlation factor (Egger et al. 2025's slope: pressed
 cell's RMC change against the model's predicted force on the test presses, counts per newton).
 
     .venv/bin/python bench/capacitive_force.py multirun/capacitive_force/<stamp>

@@ -16,7 +16,7 @@ Trackers: the experiment's own parameters (configs/experiment/capacitive_trackin
 with force (the study's default: the experiment's model fitted on the scene's characterisation
 presses, read through models/contact_tracking/force.py), ours with force through the pipeline's
 predict_raw (what the study did before the fold), ours without force, and the paper's algorithm
-(its segmentation and tracking, no force; seed 001 reports 404.7 us per frame without contact
+(its segmentation and tracking, no force; Egger et al. 2025 report 404.7 us per frame without contact
 and 627.2 us with 5 +/- 3 contacts, 12 x 21, on its machine).
 
 Every tracker runs on the same frames in one process, runs alternating between trackers (the

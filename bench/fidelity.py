@@ -1,13 +1,13 @@
-"""Fidelity table: what each seed paper observed on its sensor, measured on the scene.
+"""Fidelity table: what each paper observed on its sensor, measured on the scene.
 
     .venv/bin/python bench/fidelity.py                    # rubber12, markdown table
     .venv/bin/python bench/fidelity.py --json             # the same rows as JSON
     .venv/bin/python bench/fidelity.py --scene rubber12 --config rubber12_lab --repeats 50
     .venv/bin/python bench/fidelity.py scene.measurement=opposite     # any Hydra override
     .venv/bin/python bench/fidelity.py --patterns          # which readout reproduces the sensitivity map
-    .venv/bin/python bench/fidelity.py --scene fingertip --repeats 15   # seed 003 + Algorithm 1's diagnostic
+    .venv/bin/python bench/fidelity.py --scene fingertip --repeats 15   # Zhang et al. 2022's observations + Algorithm 1's diagnostic
 
-The observations are the notes file's (../shared/notes/seed-observations.md); one check per
+The observations are the papers' (docs/fidelity.md lists them); one check per
 observation lives in runs/fidelity/rubber12.py, which says how each is measured and judged.
 The scene is the composed Hydra config `scene=<config>` (default: the scene's default config).
 """

@@ -1,11 +1,11 @@
-"""How much does K-fold blending steady a model? Seed eq. 17's claim, measured.
+"""How much does K-fold blending steady a model? The rubber12 paper's eq. 17 claim, measured.
 
     .venv/bin/python bench/kfold_variance.py [--seeds 5] [--folds 5] [overrides ...]
 
 Trains the residual MLP once per seed as a single model and as a K-fold blend on the same
 data (the default rubber12 scene) and compares the spread of their test predictions across
 seeds: variance reduction = 1 - var_blend / var_single, averaged over test rows, per target.
-The seed paper reports 8.3 % for its ResNN. Extra arguments are Hydra overrides.
+The rubber12 paper reports 8.3 % for its ResNN. Extra arguments are Hydra overrides.
 """
 import argparse
 import sys

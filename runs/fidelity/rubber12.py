@@ -148,7 +148,7 @@ def force_varies_with_position(probe: SceneProbe) -> Measured:
 
 
 @observation("rubber12", "3b", "The load cell measures force independently of depth (§II-E): pressure is "
-             "a target of its own", "issue 11: corr(P, depth) < 0.99")
+             "a target of its own", "— (our criterion: corr(P, depth) < 0.99)")
 def pressure_is_not_depth(probe: SceneProbe) -> Measured:
     frame = probe.lab_table.frame
     corr = float(np.corrcoef(frame["pressure_pa"], frame["depth_mm"])[0, 1])

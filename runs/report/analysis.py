@@ -1,4 +1,4 @@
-"""The seed's analysis of a fitted regressor, and what the seed left open.
+"""The rubber12 paper's analysis of a fitted regressor, and what it left open.
 
 - coverage of the nominal 95 % interval on the test split, raw and after split-conformal
   calibration, per target;

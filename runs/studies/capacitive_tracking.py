@@ -1,4 +1,5 @@
-"""Study run `capacitive_tracking`: contacts with stable ids on a capacitive skin's stream (seed 001).
+"""Study run `capacitive_tracking`: contacts with stable ids on a capacitive skin's stream
+(Egger et al. 2025).
 
     python train.py experiment=capacitive_tracking                    # simulated stream, seed 0
     python train.py experiment=capacitive_tracking seed=1 scene=capacitive6x6_muca
