@@ -51,12 +51,14 @@ def panel_grid(n: int, panel_width: float = 3.4, panel_height: float = 3.2, **su
 
 def readable_log_axis(ax, which: str = "x") -> None:
     """Plain numbers on a log axis (0.01, 0.1, 1, 10, not 10^n), and over a short range more of
-    them: 1, 2 and 5 x 10^n under two decades, every integer multiple under one, so a reader
-    never has to guess a value between two powers of ten. Call after the data is drawn."""
+    them: 1, 2 and 5 x 10^n under two decades, 1, 2, 3 and 5 under 1.2, every integer multiple
+    under half a decade (more would collide), so a reader never has to guess a value between two
+    powers of ten. Call after the data is drawn."""
     axis = ax.xaxis if which == "x" else ax.yaxis
     low, high = ax.get_xlim() if which == "x" else ax.get_ylim()
     decades = math.log10(high / low) if low > 0 and high > low else 0.0
-    subs = tuple(range(1, 10)) if decades < 1 else (1, 2, 5) if decades < 2 else (1,)
+    subs = (tuple(range(1, 10)) if decades < 0.5 else (1, 2, 3, 5) if decades < 1.2 else (1, 2, 5) if decades < 2
+            else (1,))
     axis.set_major_locator(LogLocator(base=10, subs=subs))
     axis.set_major_formatter(FuncFormatter(lambda value, _: f"{value:g}"))
     axis.set_minor_formatter(NullFormatter())
