@@ -73,16 +73,19 @@ def test_the_checker_catches_a_violation(tmp_path, monkeypatch):
 
 # Options that only make sense in a time-series run compose inside one (experiment=materials10
 # sets the fingertip scene, the time-series data, PR-CNN and the time-series trainer).
-TIME_SERIES = {"model": {"prcnn", "rescnn", "inceptiontime", "lstm_fcn", "base/timeseries_classifier"},
+TIME_SERIES = {"model": {"prcnn", "rescnn", "inceptiontime", "lstm_fcn"},
                "data": {"timeseries", "fingertip", "base/timeseries", "recordings_npz", "recordings_table"},
                "scene": {"fingertip", "fingertip_minimal", "base/fingertip"},
-               "trainer": {"tsc"}, "augment": {"virtual_force_levels"}, "size": {"paper"},
-               "variant": {"prcnn_w16", "prcnn_w64", "prcnn_short_window", "rescnn", "inceptiontime", "lstm_fcn"}}
+               "trainer": {"tsc"}, "augment": {"virtual_force_levels"}, "size": {"paper"}}
+# model/base/*: what models share, composed through every model that inherits it (a base alone has
+# no recipe/<model>.yaml, and base/kfold no estimator)
+MODEL_BASES = {"base/kfold", "base/tree", "base/timeseries_classifier"}
 
 
 def config_choices() -> list[list[str]]:
-    """One override list per config file: every option of every group (bases included), every
-    experiment, variant and size, and the launchers."""
+    """One override list per config file: every option of every group (bases included, the model's
+    aside), every experiment, the configurations an experiment sweeps (experiment/<name>/*.yaml,
+    inside that experiment), every size, and the launchers."""
     configs = ROOT / "configs"
     choices = []
     for path in sorted(configs.rglob("*.yaml")):
@@ -94,9 +97,12 @@ def config_choices() -> list[list[str]]:
             choices.append([f"hydra/launcher={parts[-1]}"])  # covers launcher/<name>
             continue
         group, option = parts[0], "/".join(parts[1:])
-        if option == "base/kfold":
-            continue  # a candidate wrapper with no estimator of its own: composed through model=blend
-        prefix = "+" if group in ("variant", "size") else ""
+        if group == "model" and option in MODEL_BASES:
+            continue
+        if group == "experiment" and len(parts) == 3:
+            choices.append([f"experiment={parts[1]}", f"+experiment/{parts[1]}={parts[2]}"])
+            continue
+        prefix = "+" if group == "size" else ""
         context = ["experiment=materials10"] if option in TIME_SERIES.get(group, ()) else []
         choices.append(context + [f"{prefix}{group}={option}"])
     return choices
@@ -132,10 +138,12 @@ def _targets(node):
 
 
 def test_every_yaml_is_reached_by_the_composition_test():
-    covered = {o.split("=", 1)[1] if not o.startswith("hydra/") else o.replace("=", "/").removeprefix("hydra/")
-               for choice in config_choices() for o in choice}
+    # an override names a file by its group below the top-level one and its option:
+    # model=resmlp -> resmlp, hydra/launcher=slurm -> launcher/slurm, +experiment/e=x -> e/x
+    covered = {"/".join(key.lstrip("+").split("/")[1:] + [option])
+               for choice in config_choices() for key, option in (o.split("=", 1) for o in choice)}
     configs = ROOT / "configs"
     files = {"/".join(p.relative_to(configs).with_suffix("").parts[1:]) for p in configs.rglob("*.yaml")
              if p.parent != configs and p.relative_to(configs).parts[:2] != ("hydra", "default.yaml")}
-    files -= {"base/kfold"}
+    files -= MODEL_BASES
     assert files <= covered, files - covered
