@@ -78,8 +78,8 @@ def _labels(pairs: list[dict]) -> list[str]:
     keys = sorted({k for p in pairs for k in p})
     varying = [k for k in keys if len({p.get(k) for p in pairs}) > 1]
 
-    def short(key):
-        return key.lstrip("+~").split(".")[-1]
+    def short(key):  # model.n_estimators -> n_estimators; +experiment/accuracy_vs_time -> accuracy_vs_time
+        return key.lstrip("+~").split(".")[-1].split("/")[-1]
 
     def value(text):  # a search's trials differ in long floats: 4 significant digits tell them apart
         try:
