@@ -1,5 +1,5 @@
 """Threads benchmark: three workloads on an idle machine and beside one CPU-bound process, with
-every library's default thread count (`threads=all`, the old behaviour) and with Touchstone's
+every library's default thread count (`threads=all`) and with Touchstone's
 default (`threads=1`). The slowdown is loaded / idle wall time.
 
     .venv/bin/python bench/threads.py                      # all workloads, ~10 min on 2 cores
