@@ -3,7 +3,8 @@ export, latency) has joined the metrics; and the same numbers as TensorBoard sca
 summary on the console, so every run type (pipelines and studies) speaks the same way.
 
 Strict JSON: numpy numbers become Python numbers, a non-finite value becomes null (not defined),
-tuples become lists. Values that are a mean with its spread are written as {"mean": ..., "sd": ..., "n": ...}.
+tuples become lists. Values that are a mean with its spread are written as
+{"mean": ..., "sd": ..., "n": ...}.
 """
 import logging
 from pathlib import Path
