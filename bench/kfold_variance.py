@@ -9,7 +9,6 @@ The rubber12 paper reports 8.3 % for its ResNN. Extra arguments are Hydra overri
 """
 import argparse
 import sys
-import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -89,7 +89,7 @@ def main(argv=None):
             print(f"{workload:12s} threads={threads:3s} idle {spread(times['idle'])} s   "
                   f"beside one busy process {spread(times['one busy process'])} s   "
                   f"slowdown {times['one busy process'].mean() / times['idle'].mean():.2f}x", flush=True)
-    print(f"\n| workload | threads | idle (s) | beside one busy process (s) | slowdown |\n|---|---|---|---|---|")
+    print("\n| workload | threads | idle (s) | beside one busy process (s) | slowdown |\n|---|---|---|---|---|")
     for workload, threads, idle, loaded in rows:
         print(f"| {workload} | {threads} | {spread(idle)} | {spread(loaded)} | {loaded.mean() / idle.mean():.2f}x |")
 

@@ -25,15 +25,21 @@ stopping), the best validation epoch, validation and test accuracy, and the fit 
 import argparse
 import os
 import sys
-import time
 from pathlib import Path
-
-import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from runs.reference_tasks import MODELS, TASKS, fit_one, generate, split  # noqa: E402
+from runs.reference_tasks import (  # noqa: E402
+    LENGTH,
+    MODELS,
+    OPTIMUM,
+    TASKS,
+    fit_one,
+    generate,
+    reference_model,
+    split,
+)
 
 
 def batchnorm_check(seeds, n: int = 100, epochs: int = 15) -> None:

@@ -16,7 +16,6 @@ returns go to metrics.json (no "val" key: nothing here is a validation score).
 """
 from pathlib import Path
 
-import matplotlib
 import numpy as np
 import pandas as pd
 from hydra.utils import instantiate
@@ -25,9 +24,6 @@ from omegaconf import OmegaConf
 from common.atomic import atomic_write_text
 from runs.report.figure_files import write_figures
 from runs.report.plots import panel_grid, readable_log_axis
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 
 PAPER = {"w_slope": 1.14, "a_exponent": -1.45, "ratio": 19.0}
 THEORY = {"w_slope": 2.0 * np.sqrt(2.0), "a_exponent": -2.0, "ratio": 5.0**2.5}
