@@ -162,6 +162,7 @@ TRAINER = {
 # The run's own settings (configs/config.yaml and the groups without a _target_). cost.budget_s's
 # sign is export/latency.py's to refuse, where the measurement starts.
 SETTINGS = {"seed": SEED, "overwrite": FLAG, "cost.budget_s": number(), "cost.measure_latency": FLAG,
+            "cost.onnx_latency_calls": integer(0),
             "analysis.ablation": FLAG, "analysis.progress": FLAG, "analysis.identifiability_bins": integer(1),
             "export.enabled": FLAG, "export.opset": integer(1), "export.file": text(), "augment.enabled": FLAG}
 # A parameter of one of our targets with one of these names takes these values wherever it
@@ -194,13 +195,40 @@ def target_signature(target: str) -> tuple[tuple[Parameter, ...], bool] | None:
     path = ROOT / (module.replace(".", "/") + ".py")
     if not module or not path.is_file():
         return None
-    for node in ast.parse(path.read_text()).body:
+    tree = ast.parse(path.read_text())
+    for node in tree.body:
         if isinstance(node, ast.ClassDef) and node.name == name:
-            init = next((f for f in node.body if isinstance(f, ast.FunctionDef) and f.name == "__init__"), None)
-            return _signature(init, skip_first=True) if init else None
+            return _class_signature(node)
         if isinstance(node, ast.FunctionDef) and node.name == name:
-            return _signature(node, skip_first=False)
+            parameters, takes_kwargs = _signature(node, skip_first=False)
+            forwarded = _forwarded_to(tree, node) if takes_kwargs else None
+            if forwarded is None:
+                return parameters, takes_kwargs
+            # a factory (data.datamodules.regression.from_table) passes its **kwargs on to the
+            # class it returns: it takes its own parameters and that class's
+            own = {p.name for p in parameters}
+            return parameters + tuple(p for p in forwarded[0] if p.name not in own), forwarded[1]
     return None
+
+
+def _forwarded_to(tree: ast.Module, function: ast.FunctionDef):
+    """The signature of the class of ours a function's return annotation names (imported by name
+    into its module), or None."""
+    returns = function.returns
+    if not isinstance(returns, ast.Name):
+        return None
+    for node in tree.body:
+        if isinstance(node, ast.ClassDef) and node.name == returns.id:
+            return _class_signature(node)
+        if isinstance(node, ast.ImportFrom) and any(alias.name == returns.id and alias.asname is None
+                                                    for alias in node.names):
+            return target_signature(f"{node.module}.{returns.id}")
+    return None
+
+
+def _class_signature(node: ast.ClassDef):
+    init = next((f for f in node.body if isinstance(f, ast.FunctionDef) and f.name == "__init__"), None)
+    return _signature(init, skip_first=True) if init else None
 
 
 def _signature(function: ast.FunctionDef, skip_first: bool):
@@ -371,17 +399,33 @@ def unreached_trainer_settings(raw: dict, config: dict, overrides) -> list[str]:
             f"(model: {model.rpartition('.')[2]}); ignored"]
 
 
+def check_path_key(cfg: DictConfig) -> None:
+    """A file's path is data.path for every source; a recordings source reads it through
+    `${data.path}`, so a value set at the older data.source.path would be a second key."""
+    source = OmegaConf.select(cfg, "data.source", default=None)
+    if not isinstance(source, DictConfig) or "path" not in source:
+        return
+    value = source._get_node("path")._value()
+    if value != "${data.path}":
+        raise InputError(f"data.source.path is not a setting: a file's path is data.path for every data source "
+                         f"(data.path={value})")
+
+
 def check_config(cfg: DictConfig, overrides=()) -> list[str]:
     """Every check above on a composed config: raises InputError naming the first wrong setting
     (its key, its value and what it takes); returns one warning line when trainer settings among
     `overrides` reach nothing in this run (an empty list otherwise)."""
     run_config = OmegaConf.masked_copy(cfg, [key for key in cfg if key != "hydra"])
+    check_path_key(run_config)
     try:
         missing = sorted(OmegaConf.missing_keys(run_config))
         if missing:
             raise InputError(f"{missing[0]} needs a value (add {missing[0]}=...)")
         config = OmegaConf.to_container(run_config, resolve=True)
     except InterpolationResolutionError as error:  # e.g. model=blend reads data.n_folds, which time-series data lacks
+        unset = re.search(r"Missing mandatory value: (\S+)", str(error))  # data.source.path: ${data.path}, unset
+        if unset:
+            raise InputError(f"{unset[1]} needs a value (add {unset[1]}=...)") from None
         raise InputError(f"{error.full_key}: {str(error).splitlines()[0]}") from None
     raw = OmegaConf.to_container(run_config, resolve=False)
     check_settings(config)

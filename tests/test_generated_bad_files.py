@@ -438,7 +438,7 @@ def npz_signals(seed: int, n=12, channels=2, steps=5) -> np.ndarray:
 
 def test_npz_recordings_through_the_timeseries_datamodule(tmp_path, compose_config):
     files = Files(tmp_path)
-    cfg = compose_config(["data=recordings_npz", f"data.source.path={tmp_path / 'rig.npz'}"])
+    cfg = compose_config(["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}"])
 
     @examples(FILES["npz"])
     @given(npz_file())
@@ -491,7 +491,7 @@ def long_table_signals(seed: int, n_recordings=12, steps=5) -> np.ndarray:
 
 def test_long_tables_through_the_timeseries_datamodule(tmp_path, compose_config):
     files = Files(tmp_path)
-    cfg = compose_config(["data=recordings_table", f"data.source.path={tmp_path / 'rig.csv'}",
+    cfg = compose_config(["data=recordings_table", f"data.path={tmp_path / 'rig.csv'}",
                           "data.source.channel_columns=[a_v,b_v]", "data.label=label"])
 
     @examples(FILES["long_table"])
@@ -750,7 +750,7 @@ def test_bad_files_end_to_end_through_train_and_predict(tmp_path):
     runs = {"table": ["data=table", f"data.path={tmp_path / 'rig.csv'}",
                       "data.channel_columns=[r_1_ohm,r_2_ohm,r_3_ohm]", "data.target_columns=[x_mm,pressure_pa]",
                       "data.group_columns=[x_mm]", "model=extra_trees"],
-            "npz": ["data=recordings_npz", f"data.source.path={tmp_path / 'rig.npz'}", "model=prcnn"],
+            "npz": ["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "model=prcnn"],
             "frames": ["experiment=capacitive_tracking", f"study.recording.path={tmp_path / 'frames.csv'}",
                        "study.recording.rows=2", "study.recording.cols=2"]}
     expected = {"table": "rig.csv", "npz": "rig.npz", "frames": "frames.csv: frame 3, cell 2"}

@@ -63,15 +63,15 @@ def tones_npz(path, steps=100, n=40, split=True, **extra):
 
 def test_whole_recordings_are_the_windows_and_labels_stay_names(compose_config, tmp_path):
     path = tones_npz(tmp_path / "rig.npz", sample_rate_hz=np.array(50.0))
-    cfg = compose_config(["data=recordings_npz", f"data.source.path={path}", "data.split=predefined"])
+    cfg = compose_config(["data=recordings_npz", f"data.path={path}", "data.split=predefined"])
     dm = instantiate(cfg.data).setup()
     assert dm.X_train.shape[1:] == (3, 100)  # 100 steps untouched: no decimation, trimming or cropping
     assert len(dm.X_test) == 10 and dm.classes == ["ridged", "smooth"]
     assert dm.recording_rate_hz == 50.0 and dm.summary()["window_length"] is None
-    cfg = compose_config(["data=recordings_npz", f"data.source.path={path}", "data.window_length=140"])
+    cfg = compose_config(["data=recordings_npz", f"data.path={path}", "data.window_length=140"])
     with pytest.raises(InputError, match="recordings of 100 steps after trimming are shorter than the window length 140"):
         instantiate(cfg.data).setup()
-    cfg = compose_config(["data=recordings_npz", f"data.source.path={path}", "data.window_length=50"])
+    cfg = compose_config(["data=recordings_npz", f"data.path={path}", "data.window_length=50"])
     assert instantiate(cfg.data).setup().X_train.shape[1:] == (3, 50)  # window_step null: back to back
 
 
@@ -110,7 +110,7 @@ def test_readmes_npz_command_runs_on_100_step_series(tmp_path):
     path = tones_npz(tmp_path / "rig.npz", sample_rate_hz=np.array(50.0))
     run_dir = tmp_path / "run"
     command = [sys.executable, str(ROOT / "train.py"), "experiment=materials10", "data=recordings_npz",
-               f"data.source.path={path}", "data.label=y", "data.split=predefined",
+               f"data.path={path}", "data.label=y", "data.split=predefined",
                "model.network.branch_width=8", "model.network.fusion_width=8", "trainer.max_epochs=2",
                "trainer.lr_milestones=[1]", "trainer.progress=false", "trainer.device=cpu",
                "cost.measure_latency=false", f"hydra.run.dir={run_dir}"]
@@ -139,7 +139,7 @@ def test_a_split_value_typo_is_one_line_and_exit_2(tmp_path):
     arrays["split"] = np.array(["train"] * 39 + ["tets"])
     np.savez(path, **arrays)
     result = subprocess.run([sys.executable, str(ROOT / "train.py"), "experiment=materials10", "data=recordings_npz",
-                             f"data.source.path={path}", "data.split=predefined", f"hydra.run.dir={tmp_path / 'run'}"],
+                             f"data.path={path}", "data.split=predefined", f"hydra.run.dir={tmp_path / 'run'}"],
                             capture_output=True, text=True, cwd=tmp_path, timeout=300)
     assert result.returncode == 2, result.stderr[-2000:]
     assert result.stderr.strip() == (f"error: {path}: array 'split': split value 'tets' in split[39] is not one of "

@@ -82,7 +82,7 @@ def test_a_run_through_hydra_keeps_its_checkpoint_in_the_run_folder(compose_conf
     from runs.run import run
     X, y = generate("frequency", 40, seed=0)
     np.savez(tmp_path / "rig.npz", X=X, y=y)
-    common = ["data=recordings_npz", f"data.source.path={tmp_path / 'rig.npz'}", "model=prcnn", "trainer=reference",
+    common = ["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "model=prcnn", "trainer=reference",
               "trainer.max_epochs=3", "trainer.progress=false", "trainer.device=cpu",
               "model.network.branch_width=8", "model.network.fusion_width=8"]
     whole = run(compose_config(common), tmp_path / "whole")

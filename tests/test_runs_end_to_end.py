@@ -145,7 +145,7 @@ def write_long_table(path):
 def test_recordings_table_trains_end_to_end(compose_config, tmp_path):
     path = tmp_path / "rig.csv"
     recordings = write_long_table(path)
-    cfg = compose_config(["experiment=materials10", "data=recordings_table", f"data.source.path={path}",
+    cfg = compose_config(["experiment=materials10", "data=recordings_table", f"data.path={path}",
                           "data.source.channel_columns=[triboelectric_na,piezoresistive_v]",
                           "data.source.force_column=force_level_n", "data.split=force_level",
                           "data.test_fraction=0.5", "data.decimate=10", "trainer.max_epochs=2", "trainer.lr_milestones=[1]", "trainer.progress=false",

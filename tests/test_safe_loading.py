@@ -222,7 +222,7 @@ def test_train_py_refuses_a_crafted_checkpoint_end_to_end(tmp_path, marker):
     (folder / "checkpoint").mkdir(parents=True)
     torch.save({"fingerprint": {}, "module": Payload(marker)}, folder / "checkpoint" / "last.pt")
     result = subprocess.run(
-        [sys.executable, "train.py", "data=recordings_npz", f"data.source.path={tmp_path / 'rig.npz'}", "model=prcnn",
+        [sys.executable, "train.py", "data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "model=prcnn",
          "trainer.max_epochs=1", "trainer.progress=false", "model.network.branch_width=4",
          "model.network.fusion_width=4", f"trainer.resume_from={folder}", f"hydra.run.dir={tmp_path / 'run'}"],
         capture_output=True, text=True, cwd=ROOT, env={**os.environ, "CI": "true"})

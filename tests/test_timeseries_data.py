@@ -247,7 +247,7 @@ def test_users_npz_trains_through_hydra(compose_config, tmp_path):
     X = np.stack([np.stack([np.sin(2 * np.pi * f * t) + 0.3 * rng.standard_normal(200),
                             rng.standard_normal(200)]) for f in np.repeat([1.0, 3.0, 6.0], 20)])
     np.savez(tmp_path / "rig.npz", X=X, y=np.repeat(["slow", "mid", "fast"], 20))
-    cfg = compose_config(["experiment=materials10", "data=recordings_npz", f"data.source.path={tmp_path / 'rig.npz'}",
+    cfg = compose_config(["experiment=materials10", "data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}",
                           "data.label=y", "data.window_length=100", "data.window_step=50", "data.trim_start=0",
                           "data.trim_end=0", "trainer.max_epochs=8", "trainer.lr_milestones=[6]",
                           "trainer.progress=false", "trainer.device=cpu"])

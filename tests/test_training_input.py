@@ -133,7 +133,7 @@ def tones(n=24, steps=60, channels=2, classes=("slow", "fast"), seed=0):
 def npz_datamodule(path, *overrides):
     """data=recordings_npz as train.py composes it (its defaults: split=auto, declared_split=use)."""
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
-        cfg = compose(config_name="config", overrides=["data=recordings_npz", f"data.source.path={path}", *overrides])
+        cfg = compose(config_name="config", overrides=["data=recordings_npz", f"data.path={path}", *overrides])
     return instantiate(cfg.data)
 
 
@@ -338,7 +338,7 @@ def test_train_py_refuses_an_overflowing_channel_in_one_line(tmp_path):
 def test_train_py_refuses_recordings_of_one_class_before_training(tmp_path):
     X, y = tones()
     np.savez(tmp_path / "rig.npz", X=X, y=np.full(len(y), "glass"))
-    result, run_dir = train(tmp_path, "data=recordings_npz", f"data.source.path={tmp_path / 'rig.npz'}", "model=prcnn")
+    result, run_dir = train(tmp_path, "data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "model=prcnn")
     assert result.returncode == 2, result.stderr[-2000:]
     assert result.stderr == (f"error: {tmp_path / 'rig.npz'}: every recording has y = 'glass'; classification "
                              "needs at least two classes\n")

@@ -75,12 +75,13 @@ def test_a_tiny_training_run_on_the_fingertip_beats_chance(compose_config, tmp_p
     assert saved["test"]["accuracy"] == metrics["test"]["accuracy"]
     assert_predictions_match_metrics(tmp_path, metrics)
     assert (tmp_path / "confusion.png").stat().st_size > 0 and (tmp_path / "confusion_test.png").stat().st_size > 0
-    events = EventAccumulator(str(tmp_path / "tensorboard")).Reload()
+    (run_events,) = (tmp_path / "tensorboard").iterdir()  # one TensorBoard run, named for what ran
+    events = EventAccumulator(str(run_events)).Reload()
     assert len(events.Scalars("accuracy/val")) == 6
     assert {"figures/confusion", "figures/confusion_test"} <= set(events.Tags()["images"])
     assert events.Scalars("final/test_accuracy")[0].value == pytest.approx(metrics["test"]["accuracy"])
-    hparams = EventAccumulator(str(tmp_path / "tensorboard" / "hparams")).Reload()
-    assert {"hparam/val_accuracy", "hparam/test_accuracy"} <= set(hparams.Tags()["scalars"])
+    assert {"hparam/val_accuracy", "hparam/test_accuracy"} <= set(events.Tags()["scalars"])
+    assert "_hparams_/session_start_info" in events.PluginTagToContent("hparams")
 
 
 def ten_tones_npz(path):
@@ -100,7 +101,7 @@ def test_baselines_train_through_hydra(compose_config, tmp_path, model):
     # Tones, not the fingertip: none of the baselines beats chance on a few fingertip recordings
     # in a test's budget, and a bound that cannot fail tests nothing.
     cfg = compose_config(["experiment=materials10", f"model={model}", "data=recordings_npz",
-                          f"data.source.path={ten_tones_npz(tmp_path / 'tones.npz')}", "data.label=y",
+                          f"data.path={ten_tones_npz(tmp_path / 'tones.npz')}", "data.label=y",
                           "data.window_length=100", "data.window_step=50", "data.trim_start=0", "data.trim_end=0",
                           "trainer.max_epochs=8", "trainer.lr_milestones=[6]", "trainer.progress=false",
                           "trainer.device=cpu"])

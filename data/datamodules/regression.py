@@ -147,7 +147,7 @@ class RegressionDataModule:
 
 
 def from_table(path, channel_columns, target_columns, group_columns=None, split_column="split",
-               **datamodule_options):
+               **datamodule_options) -> RegressionDataModule:
     """`data=table`: a user's CSV/Parquet recording served by the same datamodule as a scene."""
     source = TableSource(path, channel_columns, target_columns, group_columns, split_column)
     return RegressionDataModule(source, **datamodule_options)

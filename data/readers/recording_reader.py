@@ -136,7 +136,9 @@ def _npz_sample_rate(rate, path) -> float:
     return float(rate.reshape(()))
 
 
-def load_npz(path, label="y", sample_rate_hz=None) -> RecordingSet:
+def read_npz(path, required=("X", "y")) -> dict[str, np.ndarray]:
+    """The arrays of NPZ_EXPECTED the archive holds, read with allow_pickle=False; `required`
+    ones missing, a pickle or a damaged archive is a one-line InputError."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path}: no such file")
@@ -152,52 +154,78 @@ def load_npz(path, label="y", sample_rate_hz=None) -> RecordingSet:
     if not isinstance(archive, np.lib.npyio.NpzFile):
         raise InputError(f"{path}: a single array, not an NPZ archive; save one with np.savez(path, X=..., y=...)")
     with archive:
-        for key in ("X", "y"):
+        for key in required:
             if key not in archive:
                 raise InputError(f"{path}: missing array '{key}'; found {', '.join(archive.files)}")
-        X, y = _npz_array(archive, "X", path), _npz_array(archive, "y", path)
-        optional = {key: _npz_array(archive, key, path) for key in ("force_level", "channel_names", "split",
-                                                                     "sample_rate_hz") if key in archive}
+        return {key: _npz_array(archive, key, path) for key in NPZ_EXPECTED if key in archive}
+
+
+def npz_recordings(arrays, path) -> tuple[np.ndarray, list[str], float | None]:
+    """X (n, channels, length) of real, finite numbers; its channel names (channel_<k> when the
+    file names none); the sample rate the file declares (None without one)."""
+    X = arrays["X"]
     if X.ndim != 3:
         raise InputError(f"{path}: X must be (n, channels, length), got shape {X.shape}")
     if X.dtype.kind not in "iuf":  # complex would lose its imaginary part, booleans become 0/1: refused, not cast
         raise InputError(f"{path}: X must be real numbers (integers or floats), got dtype {X.dtype}")
-    _check_labels(y, len(X), path)
     if X.dtype.kind == "f" and not np.isfinite(X).all():
         k, c, t = np.unravel_index(int(np.flatnonzero(~np.isfinite(X))[0]), X.shape)
         raise InputError(f"{path}: X contains NaN or inf, first at X[{k}, {c}, {t}] ({X[k, c, t]})")
-    names = optional.get("channel_names")
+    names = arrays.get("channel_names")
     names = [str(c) for c in names] if names is not None else [f"channel_{k}" for k in range(X.shape[1])]
     if len(names) != X.shape[1]:
         raise InputError(f"{path}: channel_names has {len(names)} names for {X.shape[1]} channels")
+    declared = _npz_sample_rate(arrays["sample_rate_hz"], path) if "sample_rate_hz" in arrays else None
+    return X, names, declared
+
+
+def load_npz(path, label="y", sample_rate_hz=None) -> RecordingSet:
+    path = Path(path)
+    arrays = read_npz(path)
+    X, names, declared = npz_recordings(arrays, path)
+    y = arrays["y"]
+    _check_labels(y, len(X), path)
     labels = pd.DataFrame({label: y})
-    if "force_level" in optional:
-        labels["force_level_n"] = _check_force_levels(optional["force_level"], len(X), path)
-    if "split" in optional:
-        labels["split"] = _npz_split(optional["split"], len(X), path)
-    declared = _npz_sample_rate(optional["sample_rate_hz"], path) if "sample_rate_hz" in optional else None
+    if "force_level" in arrays:
+        labels["force_level_n"] = _check_force_levels(arrays["force_level"], len(X), path)
+    if "split" in arrays:
+        labels["split"] = _npz_split(arrays["split"], len(X), path)
     return RecordingSet(X, names, labels, _sample_rate(sample_rate_hz, declared, path),
                         {"source": "npz", "path": str(path)})
 
 
-def _median_step_rate(frame, recording_column, time_column, path) -> float:
-    """One over the median time step within recordings (seconds, as the time column's `_s` says)."""
-    steps = frame.groupby(recording_column, sort=False)[time_column].diff().dropna().to_numpy(dtype=np.float64)
+def median_step_rate(recordings, time_column, path, remedy="set data.source.sample_rate_hz") -> float:
+    """One over the median time step within recordings (seconds, as the time column's `_s` says);
+    `recordings`: table_recordings' groups (or one recording's rows)."""
+    steps = recordings[time_column].diff().dropna().to_numpy(dtype=np.float64)
     step_s = float(np.median(steps)) if steps.size else float("nan")
     if not step_s > 0:
         raise InputError(f"{path}: time column '{time_column}' gives no positive time step (repeated time stamps?); "
-                         "set data.source.sample_rate_hz")
+                         + remedy)
     return 1.0 / step_s
+
+
+def table_recordings(frame, recording_column, time_column, path):
+    """A long table's recordings in id order, each one's rows in time order (stable: equal times,
+    or no time column, keep the file's order), as pandas groups."""
+    _check_recording_ids(frame, recording_column, path)
+    order = [recording_column] + ([time_column] if time_column else [])
+    return frame.sort_values(order, kind="stable").groupby(recording_column, sort=True)
+
+
+def _check_recording_ids(frame, recording_column, path) -> None:
+    ids = frame[recording_column]
+    if ids.isna().any():
+        row = int(np.flatnonzero(ids.isna().to_numpy())[0])
+        raise InputError(f"{path}: recording column '{recording_column}' is empty in {where(path, row)}")
 
 
 def _check_recording_columns(frame, recording_column, label_columns, force_column, path) -> None:
     """Every row names its recording and carries its labels (and force level), one value per
     recording: the labels of a recording are read from one row, so a missing or changing one
     would silently mislabel it."""
+    _check_recording_ids(frame, recording_column, path)
     ids = frame[recording_column]
-    if ids.isna().any():
-        row = int(np.flatnonzero(ids.isna().to_numpy())[0])
-        raise InputError(f"{path}: recording column '{recording_column}' is empty in {where(path, row)}")
     for column in label_columns:
         values = frame[column]
         if values.dtype.kind in "cMm":
@@ -240,9 +268,8 @@ def load_long_table(path, recording_column, time_column, channel_columns, label_
                               lambda row: where(path, row))
         check_one_value_per_group(values, frame[recording_column].to_numpy(), f"{path}", "recording")
         frame = frame.assign(**{split_column: values})
-    frame = frame.sort_values([recording_column, time_column], kind="stable")
     arrays, rows = [], []
-    parts = frame.groupby(recording_column, sort=True)
+    parts = table_recordings(frame, recording_column, time_column, path)
     for recording, part in progress(parts, desc=f"recordings of {Path(path).name}", unit="recordings"):
         arrays.append(part[list(channel_columns)].to_numpy(dtype=np.float64).T)
         first = part.iloc[0]
@@ -252,13 +279,13 @@ def load_long_table(path, recording_column, time_column, channel_columns, label_
         if has_split:
             row["split"] = first[split_column]
         rows.append(row)
-    rate = _sample_rate(sample_rate_hz, _median_step_rate(frame, recording_column, time_column, path), path)
+    rate = _sample_rate(sample_rate_hz, median_step_rate(parts, time_column, path), path)
     return RecordingSet(_stack(arrays, path, lengths), list(channel_columns), pd.DataFrame(rows), rate,
                         {"source": "table", "path": str(path)})
 
 
 class NpzRecordings:
-    """`data=recordings_npz data.source.path=rig.npz`: a user's NPZ as a recordings source."""
+    """`data=recordings_npz data.path=rig.npz`: a user's NPZ as a recordings source."""
 
     def __init__(self, path, label="y", sample_rate_hz=None):
         self.path, self.label, self.sample_rate_hz = path, label, sample_rate_hz
@@ -268,7 +295,7 @@ class NpzRecordings:
 
 
 class LongTableRecordings:
-    """`data=recordings_table data.source.path=rig.parquet`: a user's long table as a recordings source."""
+    """`data=recordings_table data.path=rig.parquet`: a user's long table as a recordings source."""
 
     def __init__(self, path, recording_column, time_column, channel_columns, label_columns,
                  force_column=None, sample_rate_hz=None, split_column="split", lengths="equal"):
