@@ -68,6 +68,21 @@ def _is_alive(pid: int, process_start: str | None) -> bool:
     return True
 
 
+def this_process() -> dict:
+    """This process as {pid, host, process_start}: enough for `process_state` to tell later, from
+    another process, whether it still runs (run folders and search trials record it)."""
+    pid = os.getpid()
+    return {"pid": pid, "host": socket.gethostname(), "process_start": _process_start(pid)}
+
+
+def process_state(record: dict) -> str:
+    """`alive`, `gone` or `elsewhere` (another host: cannot be checked from here) for a process
+    that `this_process` recorded."""
+    if record["host"] != socket.gethostname():
+        return "elsewhere"
+    return "alive" if _is_alive(int(record["pid"]), record.get("process_start")) else "gone"
+
+
 def config_hash(config: DictConfig) -> str:
     """A run's composed configuration, as .hydra/config.yaml holds it (interpolations unresolved),
     as 16 hex digits of SHA-256 over its canonical JSON: neither key order nor YAML formatting
@@ -80,9 +95,7 @@ def config_hash(config: DictConfig) -> str:
 def mark_running(folder, configuration_hash: str) -> dict:
     """The first record of a run: which process on which host, since when, with which
     configuration (config_hash). Returns it, for the last record."""
-    pid = os.getpid()
-    record = {"state": "running", "pid": pid, "host": socket.gethostname(), "started": _now(),
-              "process_start": _process_start(pid), "config_hash": configuration_hash}
+    record = {"state": "running", **this_process(), "started": _now(), "config_hash": configuration_hash}
     atomic_write_json(Path(folder) / STATUS_FILE, record)
     return record
 
@@ -117,9 +130,10 @@ def run_status(folder) -> RunStatus:
     if state != "running":
         return RunStatus(state)
     where = f"pid {pid} on {host}, started {record.get('started', '?')}"
-    if host != socket.gethostname():
+    process = process_state(record)
+    if process == "elsewhere":
         return RunStatus("running", f"{where}; cannot check another host from here")
-    if _is_alive(pid, record.get("process_start")):
+    if process == "alive":
         return RunStatus("running", where)
     return RunStatus("interrupted", f"{where}: the process ended without recording an end (killed?)")
 
