@@ -1,9 +1,14 @@
-"""What a run's predictions cost: latency at batch 1 and throughput at batch 1024, eager and in
-onnxruntime (one intra-op thread and its default), with the thread settings and core count.
+"""What a run's predictions cost. Every run that exports a model records the file's size and its
+batch-1 latency in onnxruntime on one thread (p50 and p99 over a fixed number of calls,
+`cost.onnx_latency_calls`), so every sweep's Pareto report has a latency for every job. With
+`cost.measure_latency` (extras=thorough) the comparison instead: latency at batch 1 and
+throughput at batch 1024, eager and in onnxruntime (one intra-op thread and its default), with
+the thread settings and core count.
 
-Measured in-process on the run's own raw test inputs, after warm-up, repeating calls until a
-time budget is spent (at least 5 calls; slow eager pipelines get fewer repetitions, recorded
-as `reps`). runs/run.py adds them to the run's metrics before metrics.json is written.
+Measured in-process on the run's own raw test inputs, after warm-up; the comparison repeats
+calls until a time budget is spent (at least 5 calls; slow eager pipelines get fewer
+repetitions, recorded as `reps`). runs/run.py adds them to the run's metrics before
+metrics.json is written.
 
 A fair eager baseline: the eager pipeline is timed as a deployed user would call it, in-process,
 with every scikit-learn estimator inside it (forests included) predicting on one job
@@ -72,29 +77,43 @@ def single_job(model, seen=None) -> int:
     return count
 
 
-def measure(pipeline, model_path=None, budget_s: float = 1.0) -> dict:
-    """Latency and throughput of a fitted pipeline (eager) and of its exported model_path (onnxruntime)."""
-    if not budget_s > 0:
+def _onnx_call(pipeline, model_path, threads: int):
+    predictor = OnnxPredictor(model_path, threads=threads)
+    return predictor.predict_array if isinstance(pipeline, RegressionPipeline) else predictor.predict_windows
+
+
+def measure(pipeline, model_path=None, budget_s: float = 1.0, compare: bool = True, calls: int = 100) -> dict:
+    """What predictions cost. Always, when the run exported model_path: its size and its batch-1
+    latency in onnxruntime on one thread, p50 and p99 of `calls` calls after warm-up (cheap enough
+    for every run; 0 calls: the size only). With `compare`, instead of those calls: latency and
+    throughput of the eager pipeline and of onnxruntime on one thread and on its default,
+    `budget_s` seconds of calls per figure."""
+    if compare and not budget_s > 0:
         raise InputError(f"cost.budget_s must be a positive number of seconds, got {budget_s}")
+    exported = model_path is not None and Path(model_path).is_file()
+    cost = {"cores": os.cpu_count(), **({"model_size_bytes": Path(model_path).stat().st_size} if exported else {})}
     if pipeline.examples is None or len(pipeline.examples) == 0:
-        return {}
+        return cost
+    one = pipeline.examples[:1]
+    if not compare:
+        if exported and calls > 0:
+            cost["onnx_threads"] = {"onnx_1_thread": 1}
+            cost["latency_batch1_us"] = {"onnx_1_thread": latency_us(_onnx_call(pipeline, model_path, 1), one, 0.0,
+                                                                     min_reps=calls, max_reps=calls)}
+        return cost
     batch = np.resize(pipeline.examples, (1024,) + pipeline.examples.shape[1:])
-    one = batch[:1]
     n_single = single_job(getattr(pipeline, "model", None))
     runners = {"eager": pipeline.predict_raw}
-    if model_path is not None and Path(model_path).is_file():
+    if exported:
         for name, threads in (("onnx_1_thread", 1), ("onnx_default", 0)):
-            predictor = OnnxPredictor(model_path, threads=threads)
-            runners[name] = predictor.predict_array if isinstance(pipeline, RegressionPipeline) else predictor.predict_windows
-    cost = {"cores": os.cpu_count(), "torch_threads": torch.get_num_threads(), "eager_baseline": EAGER_BASELINE,
-            "eager_estimators_set_to_one_job": n_single,
-            "onnx_threads": {"onnx_1_thread": 1, "onnx_default": "onnxruntime default (all cores)"},
-            "latency_batch1_us": {}, "throughput_batch1024_per_s": {}}
+            runners[name] = _onnx_call(pipeline, model_path, threads)
+    cost.update({"torch_threads": torch.get_num_threads(), "eager_baseline": EAGER_BASELINE,
+                 "eager_estimators_set_to_one_job": n_single,
+                 "onnx_threads": {"onnx_1_thread": 1, "onnx_default": "onnxruntime default (all cores)"},
+                 "latency_batch1_us": {}, "throughput_batch1024_per_s": {}})
     for name, call in progress(runners.items(), desc="latency", unit="runtimes"):
         cost["latency_batch1_us"][name] = latency_us(call, one, budget_s)
         cost["throughput_batch1024_per_s"][name] = throughput_per_s(call, batch, budget_s)
-    if model_path is not None and Path(model_path).is_file():
-        cost["model_size_bytes"] = Path(model_path).stat().st_size
     return cost
 
 

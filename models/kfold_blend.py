@@ -20,6 +20,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from common.progress import progress
 from data.splits.indices import kfold_indices
+from models.epoch_callback import member_callback
 from models.uncertainty import IntervalMixin
 
 log = logging.getLogger(__name__)
@@ -54,7 +55,7 @@ class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
             if "seed" in model.get_params():
                 model.set_params(seed=self.seed + k)
             start, cpu_start = time.perf_counter(), time.process_time()
-            model.fit(X[fit_rows], y[fit_rows], epoch_callback=epoch_callback if k == 0 else None,
+            model.fit(X[fit_rows], y[fit_rows], epoch_callback=member_callback(epoch_callback, f"fold{k}"),
                       groups=None if groups is None else np.asarray(groups)[fit_rows])
             self.fold_fit_time_s_.append(time.perf_counter() - start)
             self.fold_fit_cpu_time_s_.append(time.process_time() - cpu_start)

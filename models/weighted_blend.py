@@ -29,6 +29,7 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from common.errors import InputError
 from common.progress import progress
 from data.splits.indices import carve_validation
+from models.epoch_callback import member_callback
 from models.kfold_blend import KFoldBlend
 from models.uncertainty import IntervalMixin
 
@@ -121,9 +122,9 @@ class ValidationWeightedBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         self.models_, self.fit_time_s_, scores, val_predictions = {}, {}, [], []
         for name, estimator in progress(self.candidates.items(), desc="blend candidates", unit="models"):
             start = time.perf_counter()
-            model = clone(estimator).fit(X, y, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
+            model = clone(estimator).fit(X, y, X_val, y_val, epoch_callback=member_callback(epoch_callback, name),
+                                         groups=groups)
             self.fit_time_s_[name] = time.perf_counter() - start
-            epoch_callback = None  # curves in TensorBoard come from the first net only
             predicted = model.predict(X_val).reshape(y_val2.shape)
             scores.append([r2_score(y_val2[:, k], predicted[:, k]) if len(y_val2) > 1 else np.nan
                            for k in range(y_val2.shape[1])])

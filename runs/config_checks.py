@@ -163,6 +163,7 @@ TRAINER = {
 # sign is export/latency.py's to refuse, where the measurement starts.
 SETTINGS = {"seed": SEED, "overwrite": FLAG, "cost.budget_s": number(), "cost.measure_latency": FLAG,
             "cost.onnx_latency_calls": integer(0),
+            "cost.onnx_latency_calls": integer(0),
             "analysis.ablation": FLAG, "analysis.progress": FLAG, "analysis.identifiability_bins": integer(1),
             "export.enabled": FLAG, "export.opset": integer(1), "export.file": text(), "augment.enabled": FLAG}
 # A parameter of one of our targets with one of these names takes these values wherever it

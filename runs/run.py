@@ -1,5 +1,7 @@
 """A Touchstone run, top to bottom: check and seed, fit and report (the task's pipeline or a
-study), export the model to ONNX, measure what a prediction costs, and write metrics.json once.
+study), export the model to ONNX, measure what a prediction costs (every exported model's
+onnxruntime latency and size; the eager-vs-onnxruntime comparison with cost.measure_latency),
+and write metrics.json once.
 
 A run that is not "fit one model on one datamodule" (a scene study such as a receptive-field
 profile, a contact tracker on a stream) is a `study`: an experiment sets `study:` to a node with
@@ -22,6 +24,7 @@ from hydra.core.hydra_config import HydraConfig
 from hydra.utils import call, instantiate
 from omegaconf import DictConfig
 
+from common.distributed import launched_world_size
 from common.progress import phase
 from export.latency import log_costs, measure
 from export.run_export import write_onnx
@@ -29,6 +32,7 @@ from runs.classification import run_classification
 from runs.config_checks import check_config
 from runs.regression import run_regression
 from runs.report.metrics_file import write_metrics
+from runs.report.tensorboard_logger import run_name
 
 log = logging.getLogger(__name__)
 
@@ -47,7 +51,7 @@ def run(cfg: DictConfig, output_dir: str | Path, config_hash: str = "unknown") -
         log.warning(warning)
     seed_everything(cfg.seed)
     output_dir = Path(output_dir)
-    with instantiate(cfg.logger, log_dir=str(output_dir / "tensorboard")) as logger:
+    with instantiate(cfg.logger, log_dir=str(output_dir / "tensorboard" / run_name(cfg))) as logger:
         if cfg.get("study") is not None:
             metrics = {"study": cfg.study._target_.rsplit(".", 1)[-1], **call(cfg.study, cfg, output_dir, logger)}
         else:
@@ -59,9 +63,11 @@ def run(cfg: DictConfig, output_dir: str | Path, config_hash: str = "unknown") -
             if cfg.export.enabled:
                 with phase("ONNX export"):
                     model_path = write_onnx(pipeline, output_dir / cfg.export.file, cfg.export.opset, config_hash)
-            if cfg.cost.measure_latency:
+            if model_path is not None or cfg.cost.measure_latency:
                 with phase("latency measurement"):
-                    metrics["cost"].update(measure(pipeline, model_path, cfg.cost.budget_s))
+                    metrics["cost"].update(measure(pipeline, model_path, cfg.cost.budget_s,
+                                                   compare=cfg.cost.measure_latency, calls=cfg.cost.onnx_latency_calls))
                 log_costs(metrics["cost"], logger)
+        metrics["world_size"] = launched_world_size()  # processes that trained it (torchrun, submitit tasks)
         write_metrics(output_dir, metrics, logger)
     return metrics
