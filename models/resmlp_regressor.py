@@ -21,6 +21,7 @@ from common.errors import InputError
 from common.progress import progress
 from data.splits.indices import carve_validation
 from models.nets.resmlp import ResMLP
+from models.distributed import TrainingGroup, rank_seed
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
 
@@ -71,6 +72,7 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
     # -- contract ---------------------------------------------------------------------------
     @flush_denormals()
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
+        group = TrainingGroup()  # this process's part when several train the net (models/distributed.py)
         torch.manual_seed(self.seed)
         X, y = validate_data(self, X, y, multi_output=True, y_numeric=True, dtype=np.float64)
         self.single_output_ = y.ndim == 1
@@ -83,7 +85,7 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
         X_val = np.asarray(X_val, dtype=np.float64)
         y_val = np.asarray(y_val, dtype=np.float64).reshape(len(X_val), -1)
 
-        self.device_ = resolve_device(self.device)
+        self.device_ = group.device(resolve_device(self.device))
         self.feature_mean_ = X.mean(axis=0)
         self.feature_scale_ = np.where(X.std(axis=0) > 0, X.std(axis=0), 1.0)
         self.target_mean_ = y.mean(axis=0)
@@ -92,6 +94,9 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
             raise InputError("resmlp: inputs or targets are too large to standardise (overflow); rescale them")
         self.module_ = ResMLP(X.shape[1], y.shape[1], tuple(self.widths), tuple(self.dropouts),
                               self.noise_std).to(self.device_)
+        trained = group.prepare(self.module_)
+        if group.rank:  # rank 0 continues the run's seed stream, so one process trains as it always did
+            torch.manual_seed(rank_seed(self.seed, group.rank))
         Xt, yt = self._inputs(X), self._tensor((y - self.target_mean_) / self.target_scale_)
         Xv, yv = self._inputs(X_val), self._tensor((y_val - self.target_mean_) / self.target_scale_)
 
@@ -101,22 +106,28 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
         generator = torch.Generator().manual_seed(self.seed)
         best_loss, best_state, waited = math.inf, None, 0
         self.history_ = []
-        bar = progress(range(self.max_epochs), desc="resmlp", unit="epochs", enabled=self.progress)
+        self.step_losses_ = []  # the global batch's loss (with the weight penalty) at every optimiser step
+        bar = progress(range(self.max_epochs), desc="resmlp", unit="epochs", enabled=self.progress and group.is_writer)
         for epoch in bar:
             self.module_.train()
             order = torch.randperm(len(Xt), generator=generator).to(self.device_)
-            total, seen = 0.0, 0
+            step_sums, step_sizes = [], []
             for start in range(0, len(order), self.batch_size):
                 batch = order[start:start + self.batch_size]
-                if len(batch) < 2:  # BatchNorm cannot normalise a batch of one in training
+                if len(batch) < group.smallest_batch():  # BatchNorm cannot normalise a batch of one in training
                     continue
-                loss = torch.mean((self.module_(Xt[batch]) - yt[batch]) ** 2) + self._penalty()
+                mine = group.shard(batch)
+                loss = (torch.mean((trained(Xt[mine]) - yt[mine]) ** 2) * group.share(len(mine), len(batch))
+                        + self._penalty())
                 optimiser.zero_grad()
                 loss.backward()
                 optimiser.step()
-                total, seen = total + loss.item() * len(batch), seen + len(batch)
-            train_loss = total / max(seen, 1)
-            val_loss = self._mse(Xv, yv)
+                step_sums.append(loss.item() * len(batch) / group.size)
+                step_sizes.append(len(batch))
+            step_sums = group.totals(step_sums)
+            self.step_losses_ += [s / n for s, n in zip(step_sums, step_sizes)]
+            train_loss = sum(step_sums) / max(sum(step_sizes), 1)
+            val_loss = group.agree(self._mse(Xv, yv))  # every rank validates; all act on rank 0's number
             if not (math.isfinite(train_loss) and math.isfinite(val_loss)):
                 raise InputError(f"resmlp: training diverged at epoch {epoch + 1} (loss is "
                                  f"{train_loss if not math.isfinite(train_loss) else val_loss}); "
@@ -136,6 +147,7 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
                 if self.early_stopping_patience is not None and waited >= self.early_stopping_patience:
                     break
         bar.close()
+        group.release(self.module_)
         self.module_.load_state_dict(best_state)
         self.module_.eval()
         self.best_val_loss_ = best_loss

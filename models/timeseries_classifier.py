@@ -38,6 +38,7 @@ from torch import nn
 
 from common.errors import InputError
 from common.progress import HEARTBEAT_S, on_terminal, progress
+from models.distributed import TrainingGroup, rank_seed
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
 OPTIMISERS = ("sgd", "adam")
@@ -127,10 +128,11 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                                                               patience=self.lr_plateau_patience, min_lr=self.min_lr)
         return torch.optim.lr_scheduler.MultiStepLR(optimiser, milestones=list(self.milestones), gamma=self.gamma)
 
-    def _recalibrate(self, Xt):
+    def _recalibrate(self, Xt, group: TrainingGroup):
         """Exact training-set BatchNorm statistics for the current weights (momentum None: a
         cumulative average over the batches). Only the BatchNorm layers are put in training
-        mode, so dropout draws no random numbers and the RNG stream is left as it was."""
+        mode, so dropout draws no random numbers and the RNG stream is left as it was. With
+        several ranks each computes its shard of every batch and the moments are summed."""
         norms = [m for m in self.module_.modules() if isinstance(m, nn.modules.batchnorm._BatchNorm)]
         if not norms:
             return
@@ -142,7 +144,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             m.train()
         with torch.no_grad():
             for batch in self._batches(Xt, 512):
-                self.module_(batch.to(self.device_))
+                self.module_(group.shard(batch).to(self.device_))
         for m, momentum in zip(norms, momenta):
             m.momentum = momentum
         self.module_.eval()
@@ -176,7 +178,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         missing = sorted(set(CHECKPOINT_KEYS) - set(state)) if isinstance(state, dict) else ["everything"]
         if missing:
             raise InputError(f"trainer.resume_from: {path} is not a Touchstone checkpoint (no {missing[0]!r})")
-        saved = state["fingerprint"]
+        saved = {"world_size": 1, **state["fingerprint"]}  # a checkpoint without the key: one process wrote it
         differs = sorted(k for k in fingerprint if saved.get(k) != fingerprint[k])
         if differs:
             raise InputError(f"trainer.resume_from: the checkpoint {path} was written by another configuration "
@@ -191,6 +193,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
     # -- contract ---------------------------------------------------------------------------
     @flush_denormals()
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
+        group = TrainingGroup()  # this process's part when several train the net (models/distributed.py)
         torch.manual_seed(self.seed)
         X = np.asarray(X, dtype=np.float32)
         y = np.asarray(y, dtype=np.int64)
@@ -203,9 +206,12 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         self.channel_std_ = np.where(spread > 0, spread, 1.0)
         X = self._scaled(X)
         self.classes_ = np.arange(n_classes)
-        self.device_ = resolve_device(self.device)
+        self.device_ = group.device(resolve_device(self.device))
         self.module_ = self.network(n_channels=X.shape[1], n_classes=n_classes, length=X.shape[2],
                                     modalities=self.modalities).to(self.device_)
+        trained = group.prepare(self.module_)
+        if group.rank:  # rank 0 continues the run's seed stream, so one process trains as it always did
+            torch.manual_seed(rank_seed(self.seed, group.rank))
         self.batch_size_ = self.effective_batch_size(len(X))
         optimiser = self._optimiser()
         schedule = self._schedule(optimiser)
@@ -213,7 +219,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         generator = torch.Generator().manual_seed(self.seed)
         Xt, yt = torch.as_tensor(X), torch.as_tensor(y)
         y_val_t = torch.as_tensor(np.asarray(y_val, dtype=np.int64)) if X_val is not None else None
-        fingerprint = self._fingerprint(X.shape[1:])
+        fingerprint = {**self._fingerprint(X.shape[1:]), "world_size": group.size}  # dropout draws per rank
         self.history_, best, best_state, waited, first_epoch, elapsed_before = [], None, None, 0, 0, 0.0
         if self.resume_from is not None:
             state = self._load_checkpoint(fingerprint)
@@ -223,50 +229,57 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             self.history_, best, best_state, waited = state["history"], state["best"], state["best_state"], state["waited"]
             first_epoch, elapsed_before = state["epoch"], state["elapsed_s"]
             generator.set_state(state["generator"])
-            torch.set_rng_state(state["torch_rng"])
+            torch.set_rng_state(state["rank_rngs"][group.rank] if group.size > 1 else state["torch_rng"])
             if state.get("cuda_rng") is not None and torch.cuda.is_available():
                 torch.cuda.set_rng_state_all(state["cuda_rng"])
             if state["stopped"]:
                 first_epoch = self.max_epochs  # the interrupted run had already stopped early
         start = time.perf_counter()
         stopped = False
+        self.step_losses_ = []  # the global batch's mean loss at every optimiser step of this fit
         bar = progress(range(first_epoch, self.max_epochs), desc=type(self.module_).__name__, unit="epochs",
-                       enabled=self.progress)
+                       enabled=self.progress and group.is_writer)
         for epoch in bar:
             self.module_.train()
             order = torch.randperm(len(Xt), generator=generator)
-            total, correct, seen = 0.0, 0, 0
+            step_sums, step_sizes, correct, seen = [], [], 0, 0
             epoch_start = time.perf_counter()
             # A bar over the batches on a terminal; off a terminal, log lines only once epochs are
             # long enough that the epoch loop's own heartbeat would leave minutes silent.
             long_epochs = bool(self.history_) and self.history_[-1].get("epoch_s", 0.0) > HEARTBEAT_S
             batches = progress(list(self._batches(order, self.batch_size_)), desc=f"epoch {epoch + 1}",
-                               unit="batches", enabled=self.progress and (on_terminal() or long_epochs))
+                               unit="batches",
+                               enabled=self.progress and group.is_writer and (on_terminal() or long_epochs))
             for batch in batches:
-                if len(batch) < 2:  # BatchNorm cannot normalise a batch of one
+                if len(batch) < group.smallest_batch():  # BatchNorm cannot normalise a batch of one
                     continue
-                xb, yb = Xt[batch].to(self.device_), yt[batch].to(self.device_)
-                logits = self.module_(xb)
-                loss = loss_fn(logits, yb)
+                mine = group.shard(batch)
+                xb, yb = Xt[mine].to(self.device_), yt[mine].to(self.device_)
+                logits = trained(xb)
+                loss = loss_fn(logits, yb) * group.share(len(mine), len(batch))
                 optimiser.zero_grad()
                 loss.backward()
                 optimiser.step()
-                total += loss.item() * len(batch)
+                step_sums.append(loss.item() * len(batch) / group.size)
+                step_sizes.append(len(batch))
                 correct += int((logits.argmax(1) == yb).sum())
-                seen += len(batch)
+                seen += len(mine)
+            *step_sums, correct, seen = group.totals([*step_sums, correct, seen])
+            self.step_losses_ += [s / n for s, n in zip(step_sums, step_sizes)]
+            total = sum(step_sums)
             if not math.isfinite(total):
                 raise InputError(f"{type(self.module_).__name__}: training diverged at epoch {epoch + 1} "
                                  "(loss is not finite); lower trainer.lr")
             if self.recalibrate_batchnorm:
-                self._recalibrate(Xt)
+                self._recalibrate(Xt, group)
             train_loss = total / max(seen, 1)
             record = {"epoch": epoch + 1, "train_loss": train_loss, "train_accuracy": correct / max(seen, 1),
                       "lr": optimiser.param_groups[0]["lr"], "epoch_s": time.perf_counter() - epoch_start,
                       "elapsed_s": elapsed_before + time.perf_counter() - start}
-            if X_val is not None:
+            if X_val is not None:  # every rank validates; all act on rank 0's numbers
                 logits = self._logits(X_val)
-                record["val_loss"] = float(loss_fn(logits, y_val_t))
-                record["val_accuracy"] = float((logits.argmax(1).numpy() == y_val_t.numpy()).mean())
+                record["val_loss"], record["val_accuracy"] = group.agree(
+                    (float(loss_fn(logits, y_val_t)), float((logits.argmax(1).numpy() == y_val_t.numpy()).mean())))
                 score = (record["val_accuracy"], record["val_loss"])
             else:  # nothing to choose on: the last epoch is the model
                 score = (float(epoch), 0.0)
@@ -282,19 +295,23 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                 schedule.step()
             stopped = self.early_stopping_patience is not None and waited >= self.early_stopping_patience
             if self.checkpoint_path is not None:
+                rank_rngs = group.gather(torch.get_rng_state())
+            if self.checkpoint_path is not None and group.is_writer:
                 self._save_checkpoint({
                     "fingerprint": fingerprint, "epoch": epoch + 1, "stopped": stopped,
                     "elapsed_s": record["elapsed_s"], "module": self.module_.state_dict(),
                     "optimiser": optimiser.state_dict(), "schedule": schedule.state_dict(), "best": best,
                     "best_state": best_state, "waited": waited, "history": self.history_,
-                    "generator": generator.get_state(), "torch_rng": torch.get_rng_state(),
-                    "cuda_rng": torch.cuda.get_rng_state_all() if torch.cuda.is_available() else None})
+                    "generator": generator.get_state(), "torch_rng": rank_rngs[0],
+                    "cuda_rng": torch.cuda.get_rng_state_all() if torch.cuda.is_available() else None,
+                    **({"rank_rngs": rank_rngs} if group.size > 1 else {})})
             if epoch_callback is not None:
                 epoch_callback(record)
             bar.set_postfix({k: f"{v:.3f}" for k, v in record.items() if k.endswith(("loss", "accuracy"))})
             if stopped:
                 break
         bar.close()
+        group.release(self.module_)
         if best_state is not None:
             self.module_.load_state_dict(best_state)
         self.module_.eval()
