@@ -1,37 +1,109 @@
 """Predict with an exported Touchstone model, no training code needed:
 
-    python predict.py model=outputs/<run>/model.onnx input=recording.csv output=pred.csv [threads=N]
+    python predict.py model=outputs/<run>/model.onnx input=rig.csv output=pred.csv [threads=N]
+    python predict.py --help model=outputs/<run>/model.onnx     # what this model expects
 
-Regression models read one row per press with the model's channel columns and write the
-targets (units in the column names) and, when the model has them, 95 % interval bounds.
-Classification models read one recording (rows = time steps, channel columns) and write one
-row per consecutive window with the class probabilities. CSV or Parquet in and out.
-Bad input (a file, a value that is not finite in the model's dtype, an output that is the input
-or cannot be written, a malformed model) is one line on stderr, exit code 2, and no output file.
+Row models (a regression, or a classifier of table rows) read one row per press with the model's
+channel columns and write one row per input row: the targets (units in the column names) and,
+when the model has them, 95 % interval bounds; or the predicted class and its probabilities.
+Recording models (time-series classifiers) read recordings as training does, an NPZ
+(data/readers/recording_reader.py, no pickles) or a long table (one row per time step, a recording
+id column, a time column), and write one row per back-to-back window of each recording: its id,
+the step the window starts at, the predicted class and its probabilities. CSV or Parquet out.
+Bad input (a file, a value that is not finite in the model's dtype, a sample rate that is not the
+model's, an output that is the input or cannot be written, a malformed model) is one line on
+stderr, exit code 2, and no output file.
 """
 import os
 import sys
+import textwrap
 from pathlib import Path
+
+import numpy as np
 
 from common.atomic import atomic_write
 from common.errors import InputError
-from data.readers.table_reader import read_table_file
-from export.onnx_predictor import OnnxPredictor
+from data.readers.recording_reader import median_step_rate, npz_recordings, read_npz, table_recordings
+from data.readers.table_reader import check_columns_exist, check_numeric_columns, read_table_file, where
+from data.units import UNITS, unit_of
+from export.onnx_predictor import OnnxPredictor, Recording
 
-KEYS = ("model", "input", "output", "threads")
+# key: (default, what it is); None: required.
+ARGUMENTS = {
+    "model": (None, "the exported model, a run's model.onnx"),
+    "input": (None, "CSV or Parquet (row models: one row per press; recording models: one row per time step), "
+                    "or NPZ (recording models: X (n, channels, length), optional channel_names and sample_rate_hz, "
+                    "as training reads it)"),
+    "output": (None, "the predictions, CSV or Parquet by its suffix; written whole or not at all"),
+    "threads": ("TOUCHSTONE_THREADS, else onnxruntime's default", "onnxruntime's intra-op threads; 0: one per core"),
+    "recording_column": ("recording", "a table's recording id column, used when the file has it: each recording "
+                                      "is cut into windows on its own and every output row carries its id "
+                                      "(row models: the column is copied to the output)"),
+    "time_column": ("time_s", "a long table's time in seconds, used when the file has it: rows in time order "
+                              "within a recording, and its rate must be the model's"),
+}
+HELP = ("--help", "-h")
+EXAMPLES = ["python predict.py model=outputs/<run>/model.onnx input=outputs/<run>/predictions.csv output=pred.csv",
+            "python predict.py model=outputs/<run>/model.onnx input=rig.npz output=classes.csv",
+            "python predict.py --help model=outputs/<run>/model.onnx"]
+RATE_TOLERANCE = 0.01  # relative: time stamps rounded in a CSV still give the model's rate
 
 
-def parse(argv) -> dict:
-    args = {}
+def parse(argv) -> tuple[dict, bool]:
+    """The key=value arguments and whether help was asked for (then only model= may be given)."""
+    args, wants_help = {}, False
     for item in argv:
+        if item in HELP:
+            wants_help = True
+            continue
         key, sep, value = item.partition("=")
-        if not sep or key not in KEYS:
-            raise InputError(f"unknown argument '{item}'; expected {', '.join(k + '=...' for k in KEYS)}")
+        if not sep or key not in ARGUMENTS:
+            raise InputError(f"unknown argument '{item}'; expected {', '.join(k + '=...' for k in ARGUMENTS)} "
+                             "(--help lists them)")
         args[key] = value
-    missing = [k for k in ("model", "input", "output") if k not in args]
-    if missing:
-        raise InputError(f"missing {', '.join(k + '=...' for k in missing)}")
-    return args
+    missing = [k for k, (default, _) in ARGUMENTS.items() if default is None and k not in args]
+    if missing and not wants_help:
+        raise InputError(f"missing {', '.join(k + '=...' for k in missing)} (--help lists the arguments)")
+    return args, wants_help
+
+
+def usage() -> str:
+    lines = ["usage: python predict.py model=MODEL.onnx input=FILE output=FILE [key=value ...]", "",
+             "Predict with a model Touchstone exported, no training code needed.", ""]
+    for key, (default, what) in ARGUMENTS.items():
+        text = what + ("" if default is None else f" (default: {default})")
+        lines.append(textwrap.fill(text, width=100, initial_indent=f"  {key + '=':<19}", subsequent_indent=" " * 21))
+    lines += ["", "Examples:"] + [f"  {example}" for example in EXAMPLES]
+    return "\n".join(lines)
+
+
+def _with_unit(column: str) -> str:
+    unit = unit_of(column)
+    return f"{column} ({UNITS[unit].quantity}, {unit})" if unit in UNITS else column
+
+
+def model_inputs(predictor: OnnxPredictor) -> str:
+    """What `predictor` expects and writes, from its metadata."""
+    what = predictor.metadata.get("model", "model")
+    lines = [f"{predictor.path}: {predictor.kind} ({what}), Touchstone {predictor.metadata.get('touchstone_version', '?')}",
+             f"  channels ({len(predictor.channels)}, in this order): "
+             + ", ".join(_with_unit(c) for c in predictor.channels)]
+    if predictor.reads_windows:
+        rate = predictor.sample_rate_hz
+        span = f" at {rate:g} Hz ({predictor.window_steps / rate:g} s)" if rate else " (sample rate unknown)"
+        lines.append(f"  input: recordings (NPZ, or a table with one row per time step); windows of "
+                     f"{predictor.window_steps} steps{span}")
+    else:
+        lines.append("  input: a table with one row per press and these channel columns")
+    if predictor.kind == "regression":
+        bounds = len(predictor.outputs) > 1
+        lines.append("  output: " + ", ".join(_with_unit(t) for t in predictor.targets)
+                     + (", each with _lower95 and _upper95" if bounds else ""))
+    else:
+        lines.append(f"  classes ({len(predictor.classes)}): {', '.join(predictor.classes)}")
+        lines.append("  output: " + ("recording (when the input names them), start_step, " if predictor.reads_windows
+                                     else "") + "predicted, " + ", ".join(f"p_{c}" for c in predictor.classes))
+    return "\n".join(lines)
 
 
 def thread_count(text: str) -> int | None:
@@ -69,6 +141,80 @@ def same_file(a: Path, b: Path) -> bool:
         raise InputError(f"cannot resolve {a} or {b} ({error})".splitlines()[0]) from None
 
 
+def check_sample_rate(predictor: OnnxPredictor, rate: float | None, source: str, said_by: str) -> None:
+    """A recording at another rate than the model's windows would be classified as if it were at
+    the model's: refused (either rate unknown: nothing to compare)."""
+    model_rate = predictor.sample_rate_hz
+    if rate is not None and model_rate is not None and abs(rate / model_rate - 1) > RATE_TOLERANCE:
+        raise InputError(f"{source}: {said_by} {rate:g} Hz, but the model's windows are {model_rate:g} Hz; "
+                         f"resample the recordings to {model_rate:g} Hz")
+
+
+def npz_input(predictor: OnnxPredictor, path: str) -> list[Recording]:
+    """An NPZ's recordings, channels put in the model's order by name; ids are X's indices."""
+    arrays = read_npz(path, required=("X",))
+    X, names, rate = npz_recordings(arrays, path)
+    missing = [c for c in predictor.channels if c not in names]
+    if missing:
+        hint = "; save the names as channel_names" if "channel_names" not in arrays else ""
+        raise InputError(f"{path}: the model reads channels {', '.join(predictor.channels)}; the NPZ has "
+                         f"{', '.join(names)}{hint}")
+    check_sample_rate(predictor, rate, path, "sample_rate_hz says")
+    order = [names.index(c) for c in predictor.channels]
+    return [Recording(k, X[k, order].astype(np.float64), lambda step: f"step {step}") for k in range(len(X))]
+
+
+def table_input(predictor: OnnxPredictor, frame, source: str, args: dict) -> tuple[list[Recording], str | None]:
+    """A long table's recordings as training reads them (recording_reader.table_recordings): by
+    id when the file has the recording column, in time order when it has the time column; each
+    step keeps its file row for messages. Also the id column used (None: one unnamed recording)."""
+    frame = frame.reset_index(drop=True)  # row k is the file's data row k, for messages
+    columns = {key: args.get(key, ARGUMENTS[key][0]) for key in ("recording_column", "time_column")}
+    for key, column in columns.items():
+        if key in args:  # named on the command line: it must be there
+            check_columns_exist(frame, [column], key.replace("_column", ""), source)
+    id_column = columns["recording_column"] if columns["recording_column"] in frame.columns else None
+    time_column = columns["time_column"] if columns["time_column"] in frame.columns else None
+    check_numeric_columns(frame, predictor.channels + ([time_column] if time_column else []), "channel/time", source)
+    if id_column:
+        groups = table_recordings(frame, id_column, time_column, source)
+    else:
+        groups = [(None, frame.sort_values(time_column, kind="stable") if time_column else frame)]
+    if time_column:
+        rate = median_step_rate(groups if id_column else groups[0][1], time_column, source,
+                                remedy="check the time column (seconds)")
+        check_sample_rate(predictor, rate, source, f"time column '{time_column}' gives")
+    recordings = [Recording(None if id_column is None else name, part[predictor.channels].to_numpy(np.float64).T,
+                            lambda step, rows=part.index.to_numpy(): where(source, int(rows[step])))
+                  for name, part in groups]
+    return recordings, id_column
+
+
+def predict(predictor: OnnxPredictor, args: dict):
+    """The predictions for args['input'] and a note on what was left out (or '')."""
+    source = args["input"]
+    if Path(source).suffix.lower() == ".npz":
+        if not predictor.reads_windows:
+            raise InputError(f"{source}: an NPZ holds recordings; this {predictor.kind} model reads one row per "
+                             "press from a CSV or Parquet table")
+        recordings, id_column = npz_input(predictor, source), "recording"
+    else:
+        frame = read_table_file(source)
+        if not predictor.reads_windows:
+            result = predictor.predict_table(frame, source)
+            id_column = args.get("recording_column", ARGUMENTS["recording_column"][0])
+            if id_column in frame.columns:
+                result.insert(0, id_column, frame[id_column].to_numpy())
+            return result, ""
+        recordings, id_column = table_input(predictor, frame, source, args)
+    result = predictor.predict_recordings(recordings, source, id_column or "recording")
+    unused = sum(r.values.shape[1] % predictor.window_steps for r in recordings)
+    note = f" from {len(recordings)} recording{'s' * (len(recordings) != 1)}"
+    if unused:
+        note += f" ({unused} steps after the last whole window of a recording are not predicted)"
+    return result, note
+
+
 def write(result, output: Path) -> None:
     parquet = output.suffix.lower() in (".parquet", ".pq")
     try:
@@ -87,21 +233,25 @@ def write(result, output: Path) -> None:
 
 def main(argv=None) -> int:
     try:
-        args = parse(sys.argv[1:] if argv is None else argv)
+        args, wants_help = parse(sys.argv[1:] if argv is None else argv)
         threads = thread_count(args["threads"]) if "threads" in args else None
+        if wants_help:
+            text = usage()
+            if "model" in args:
+                text += "\n\nThis model:\n" + model_inputs(OnnxPredictor(args["model"], threads=threads))
+            else:
+                text += "\n\nAdd model=<file> to --help to list what that model expects."
+            print(text)
+            return 0
         output = Path(args["output"])
         check_output(output, args)
         predictor = OnnxPredictor(args["model"], threads=threads)
-        frame = read_table_file(args["input"])
-        if predictor.kind == "regression":
-            result = predictor.predict_table(frame, args["input"])
-        else:
-            result = predictor.predict_recording(frame, args["input"])
+        result, note = predict(predictor, args)
         write(result, output)
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
-    print(f"wrote {len(result)} rows to {output}")
+    print(f"wrote {len(result)} rows{note} to {output}")
     return 0
 
 

@@ -1,15 +1,22 @@
 """Run an exported Touchstone model with onnxruntime, checking inputs against its metadata.
 
     predictor = OnnxPredictor("run/model.onnx")
-    predictor.predict_table(frame)      # regression: a frame with the model's channel columns
-    predictor.predict_windows(windows)  # classification: (n, channels, steps) raw windows
+    predictor.predict_table(frame)            # a row model: a frame with the model's channel columns
+    predictor.predict_windows(windows)        # a window model: (n, channels, steps) raw windows
+    predictor.predict_recordings(recordings)  # a window model: whole recordings, cut into windows
+A model reads rows (metadata input 'channels': a regression, or a classifier of table rows) or
+windows of a recording (input 'window': a time-series classifier, `window_steps` raw steps at
+`sample_rate_hz`, or 'unknown' when the data did not say).
 Every problem with the model file, its metadata or the input is a one-line InputError naming the
 file and the key, column or row; a value that is not finite in the graph's input dtype (1e308 in
 a float32 graph) is refused before the model runs, and an output that is not finite (an input
 outside what the model can compute) is refused before anything is returned.
 """
 import json
+import math
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable, Hashable
 
 import numpy as np
 import onnxruntime as ort
@@ -20,8 +27,10 @@ from common.threads import configured_threads
 from data.readers.table_reader import check_numeric_columns, where
 
 KINDS = ("regression", "classification")
-# The graph's one input and its first output per kind (export/pipelines.py writes them).
+# The graph's one input (metadata 'input'; by kind when a file has none) and its first output per
+# kind (export/pipelines.py writes them). A regression reads rows; a classifier rows or windows.
 INPUT_NAME = {"regression": "channels", "classification": "window"}
+INPUTS = {"regression": ("channels",), "classification": ("channels", "window")}
 MAIN_OUTPUT = {"regression": "prediction", "classification": "probabilities"}
 INPUT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}
 
@@ -62,13 +71,21 @@ class OnnxPredictor:
         self.outputs = self._names("outputs")
         if self.kind == "regression":
             self.targets = self._names("targets")
-            self.input_shape = (len(self.channels),)
             self.output_width = len(self.targets)
         else:
             self.classes = self._names("classes")
-            self.window_steps = self._positive_integer("window_steps")
-            self.input_shape = (len(self.channels), self.window_steps)
             self.output_width = len(self.classes)
+        self.input_name = self.metadata.get("input", INPUT_NAME[self.kind])
+        if self.input_name not in INPUTS[self.kind]:
+            raise InputError(f"{self.path}: metadata 'input' must be {' or '.join(map(repr, INPUTS[self.kind]))} "
+                             f"for a {self.kind} model, got {self.input_name[:40]!r}")
+        self.reads_windows = self.input_name == "window"
+        if self.reads_windows:
+            self.window_steps = self._positive_integer("window_steps")
+            self.sample_rate_hz = self._sample_rate()
+            self.input_shape = (len(self.channels), self.window_steps)
+        else:
+            self.input_shape = (len(self.channels),)
         self._check_graph(inputs, outputs)
 
     # -- the file's metadata and graph ------------------------------------------------------
@@ -98,11 +115,23 @@ class OnnxPredictor:
             raise InputError(f"{self.path}: metadata '{key}' must be a positive whole number, got {text[:40]!r}")
         return int(text)
 
+    def _sample_rate(self) -> float | None:
+        """The raw windows' rate in hertz; None where the data did not say ('unknown' or no key)."""
+        text = self.metadata.get("sample_rate_hz", "unknown")
+        try:
+            rate = None if text == "unknown" else float(text)
+        except ValueError:
+            rate = math.nan
+        if rate is not None and not (math.isfinite(rate) and rate > 0):
+            raise InputError(f"{self.path}: metadata 'sample_rate_hz' must be a positive number of hertz or "
+                             f"'unknown', got {text[:40]!r}")
+        return rate
+
     def _check_graph(self, inputs, outputs) -> None:
         """The graph takes and returns what its metadata says, so a mismatch is found here, not as
         an onnxruntime error halfway through a prediction. inputs: (name, type, shape) each;
         outputs: (name, shape) each."""
-        name = INPUT_NAME[self.kind]
+        name = self.input_name
         if [i[0] for i in inputs] != [name]:
             raise InputError(f"{self.path}: the graph takes {[i[0] for i in inputs]}, expected one input '{name}' "
                              f"for a {self.kind} model")
@@ -112,7 +141,7 @@ class OnnxPredictor:
         self.input_dtype = np.dtype(INPUT_DTYPES[kind])
         if not _fits(shape, self.input_shape):
             raise InputError(f"{self.path}: the graph's input '{name}' has shape {shape}, but metadata "
-                             f"'channels'{' and window_steps' if self.kind == 'classification' else ''} say "
+                             f"'channels'{' and window_steps' if self.reads_windows else ''} say "
                              f"(batch, {', '.join(map(str, self.input_shape))})")
         if [o[0] for o in outputs] != self.outputs or self.outputs[0] != MAIN_OUTPUT[self.kind]:
             raise InputError(f"{self.path}: metadata 'outputs' says {self.outputs} but the graph returns "
@@ -146,7 +175,7 @@ class OnnxPredictor:
     def _run(self, values: np.ndarray, locate) -> dict[str, np.ndarray]:
         """The graph's outputs by name, each (n, width) and finite; `locate(row)` names an input row."""
         try:
-            results = self.session.run(None, {INPUT_NAME[self.kind]: values})
+            results = self.session.run(None, {self.input_name: values})
         except Exception as error:  # onnxruntime's own error types: a graph that cannot run this input
             message = str(error).strip().splitlines()[0][:200] if str(error).strip() else ""
             raise InputError(f"{self.path}: the model failed to run ({type(error).__name__}: {message})") from None
@@ -167,8 +196,15 @@ class OnnxPredictor:
         """Names a (row, channel) cell of a table as a user finds it in the file."""
         return lambda index: f"{source}: channel column '{self.channels[index[1]]}', {where(source, index[0])}"
 
-    # -- regression -------------------------------------------------------------------------
+    def _require(self, windows: bool, what: str) -> None:
+        if self.reads_windows != windows:
+            reads = (f"windows of {self.window_steps} steps of a recording" if self.reads_windows
+                     else "one row per press")
+            raise InputError(f"{self.path}: this {self.kind} model reads {reads}, not {what}")
+
+    # -- rows: a regression, or a classifier of table rows ------------------------------------
     def predict_array(self, readings: np.ndarray) -> dict[str, np.ndarray]:
+        self._require(windows=False, what="readings of shape (n, channels)")
         readings = np.asarray(readings)
         if readings.ndim != 2 or readings.shape[1] != len(self.channels):
             raise InputError(f"{self.path}: expected readings of shape (n, {len(self.channels)}), got {readings.shape}")
@@ -176,9 +212,14 @@ class OnnxPredictor:
         return self._run(values, lambda row: f"readings row {row}")
 
     def predict_table(self, frame: pd.DataFrame, source: str = "input") -> pd.DataFrame:
+        """One output row per input row: the targets (and their 95 % bounds when the model has
+        them), or the predicted class and one probability column per class."""
+        self._require(windows=False, what="a table of rows")
         check_numeric_columns(frame, self.channels, "channel", source)
         readings = frame[self.channels].to_numpy(dtype=np.float64)
         out = self._run(self._model_input(readings, self._cell(source)), lambda row: f"{source}: {where(source, row)}")
+        if self.kind == "classification":
+            return self._classes_frame(out["probabilities"])
         prediction = out["prediction"].astype(np.float64)  # bounds in float64: float32 sums could overflow
         result = pd.DataFrame(prediction, columns=self.targets)
         if "interval_half_width" in out:
@@ -188,8 +229,9 @@ class OnnxPredictor:
                 result[f"{target}_upper95"] = prediction[:, k] + half[:, k]
         return result
 
-    # -- classification ---------------------------------------------------------------------
+    # -- windows of recordings: a time-series classifier --------------------------------------
     def predict_windows(self, windows: np.ndarray) -> np.ndarray:
+        self._require(windows=True, what="windows of shape (n, channels, steps)")
         windows = np.asarray(windows)
         if windows.ndim != 3 or windows.shape[1:] != self.input_shape:
             raise InputError(f"{self.path}: expected windows of shape (n, {self.input_shape[0]}, "
@@ -198,21 +240,54 @@ class OnnxPredictor:
                                                       f"'{self.channels[i[1]]}')")
         return self._run(values, lambda row: f"window {row}")["probabilities"]
 
-    def predict_recording(self, frame: pd.DataFrame, source: str = "input") -> pd.DataFrame:
-        """Cut one recording (rows = time steps, channel columns) into consecutive windows."""
-        check_numeric_columns(frame, self.channels, "channel", source)
-        signal = self._model_input(frame[self.channels].to_numpy(dtype=np.float64), self._cell(source))
+    def predict_recordings(self, recordings: list["Recording"], source: str = "input",
+                           id_column: str = "recording") -> pd.DataFrame:
+        """Each recording cut into back-to-back windows of window_steps from its first step (the
+        steps after its last whole window are not predicted): one row per window with the
+        recording's id in `id_column` (left out when the recordings have no ids), the step the
+        window starts at, the predicted class and one probability column per class."""
+        self._require(windows=True, what="recordings")
         steps = self.window_steps
-        n = len(signal) // steps
-        if n == 0:
-            raise InputError(f"{source}: {len(signal)} rows is shorter than the model's window of {steps} steps")
-        windows = np.ascontiguousarray(signal[:n * steps].reshape(n, steps, len(self.channels)).transpose(0, 2, 1))
-        window = lambda k: f"{source}: the window starting at {where(source, k * steps)}"  # noqa: E731
-        proba = self._run(windows, window)["probabilities"]
+        windows, starts = [], []  # starts: (recording, step) per window
+        for recording in recordings:
+            name = f"recording {recording.id}, " if recording.id is not None else ""
+            values = np.asarray(recording.values)
+            if values.ndim != 2 or values.shape[0] != len(self.channels):
+                raise InputError(f"{source}: {name}expected ({len(self.channels)} channels, steps), got {values.shape}")
+            n = values.shape[1] // steps
+            if n == 0:
+                raise InputError(f"{source}: {name}{values.shape[1]} steps is shorter than the model's window of "
+                                 f"{steps} steps")
+            cast = self._model_input(values, lambda i: f"{source}: {name}channel '{self.channels[i[0]]}', "
+                                                       f"{recording.place(i[1])}")
+            windows.append(cast[:, :n * steps].reshape(len(self.channels), n, steps).transpose(1, 0, 2))
+            starts += [(recording, k * steps) for k in range(n)]
+
+        def window(row):
+            recording, start = starts[row]
+            name = f"recording {recording.id}, " if recording.id is not None else ""
+            return f"{source}: {name}the window starting at {recording.place(start)}"
+        proba = self._run(np.ascontiguousarray(np.concatenate(windows)), window)["probabilities"]
+        result = self._classes_frame(proba)
+        result.insert(0, "start_step", [start for _, start in starts])
+        if any(recording.id is not None for recording in recordings):
+            result.insert(0, id_column, [recording.id for recording, _ in starts])
+        return result
+
+    def _classes_frame(self, proba: np.ndarray) -> pd.DataFrame:
         result = pd.DataFrame(proba, columns=[f"p_{c}" for c in self.classes])
         result.insert(0, "predicted", np.asarray(self.classes)[proba.argmax(axis=1)])
-        result.insert(0, "start_row", np.arange(n) * steps)
         return result
+
+
+@dataclass(frozen=True)
+class Recording:
+    """One recording for predict_recordings: its id (None for a file that is one unnamed
+    recording), its values (channels in the model's order, steps) and where step k sits in the
+    file, for messages (`place(k)`: 'line 12' of a CSV, 'step 40' of an NPZ recording)."""
+    id: Hashable | None
+    values: np.ndarray
+    place: Callable[[int], str]
 
 
 def _fits(shape, expected) -> bool:

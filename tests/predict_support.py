@@ -11,8 +11,11 @@ of them can be made wrong on purpose.
 - regression: `channels` [batch, 2] float64 -> cast to float32 -> sum per row -> `prediction`
   [batch, 1] float32, so a float64 reading beyond float32's range makes the output inf (as the
   exported graphs' float32 parts would);
-- classification: `window` [batch, 2, 4] float32 -> sum over the window -> softmax ->
-  `probabilities` [batch, 2], so values whose sum overflows float32 make them NaN.
+- classification of windows: `window` [batch, 2, 4] float32 (raw steps at 100 Hz) -> a weighted
+  sum over the window -> softmax -> `probabilities` [batch, 2], so values whose sum overflows
+  float32 make them NaN;
+- classification of table rows: `channels` [batch, 2] float64 -> cast to float32 -> weighted
+  sum -> softmax -> `probabilities` [batch, 2].
 """
 import json
 import runpy
@@ -29,6 +32,7 @@ CHANNELS = ["a_ohm", "b_ohm"]
 TARGETS = ["x_mm"]
 CLASSES = ["soft", "hard"]
 WINDOW_STEPS = 4
+SAMPLE_RATE_HZ = 100.0
 
 
 def regression_metadata() -> dict[str, str]:
@@ -38,8 +42,13 @@ def regression_metadata() -> dict[str, str]:
 
 def classification_metadata() -> dict[str, str]:
     return {"kind": "classification", "input": "window", "channels": json.dumps(CHANNELS),
-            "classes": json.dumps(CLASSES), "window_steps": str(WINDOW_STEPS),
+            "classes": json.dumps(CLASSES), "window_steps": str(WINDOW_STEPS), "sample_rate_hz": str(SAMPLE_RATE_HZ),
             "outputs": json.dumps(["probabilities"])}
+
+
+def row_classification_metadata() -> dict[str, str]:
+    return {"kind": "classification", "input": "channels", "channels": json.dumps(CHANNELS),
+            "classes": json.dumps(CLASSES), "outputs": json.dumps(["probabilities"])}
 
 
 def regression_model(metadata: dict | None = None) -> onnx.ModelProto:
@@ -68,6 +77,20 @@ def classification_model(metadata: dict | None = None) -> onnx.ModelProto:
                                                              ["batch", len(CLASSES)])],
                               [weights])
     return _model(graph, classification_metadata() if metadata is None else metadata)
+
+
+def row_classification_model(metadata: dict | None = None) -> onnx.ModelProto:
+    weights = helper.make_tensor("weights", TensorProto.FLOAT, [len(CHANNELS), len(CLASSES)],
+                                 np.array([1.0, -1.0, -1.0, 1.0], dtype=np.float32))
+    nodes = [helper.make_node("Cast", ["channels"], ["single"], to=TensorProto.FLOAT),
+             helper.make_node("MatMul", ["single", "weights"], ["scores"]),
+             helper.make_node("Softmax", ["scores"], ["probabilities"], axis=1)]
+    graph = helper.make_graph(nodes, "tiny_row_classification",
+                              [helper.make_tensor_value_info("channels", TensorProto.DOUBLE, ["batch", len(CHANNELS)])],
+                              [helper.make_tensor_value_info("probabilities", TensorProto.FLOAT,
+                                                             ["batch", len(CLASSES)])],
+                              [weights])
+    return _model(graph, row_classification_metadata() if metadata is None else metadata)
 
 
 def _model(graph, metadata: dict) -> onnx.ModelProto:
