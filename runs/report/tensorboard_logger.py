@@ -31,7 +31,7 @@ def run_name(cfg) -> str:
     if HydraConfig.initialized():
         hydra = HydraConfig.get()
         choices = {k: v for k, v in hydra.runtime.choices.items() if v is not None}
-        trial = hydra.job.num if hydra.mode == RunMode.MULTIRUN else None
+        trial = OmegaConf.select(hydra, "job.num", default=None) if hydra.mode == RunMode.MULTIRUN else None
     parts = [choices[k] for k in sorted(choices) if k == "experiment" or k.startswith("experiment/")]
     if not parts:
         uses_scene = "source" in cfg.data and OmegaConf.is_interpolation(cfg.data, "source")  # source: ${scene}
