@@ -5,6 +5,7 @@ import sys
 from pathlib import Path
 
 import optuna
+from optuna.storages.journal import JournalFileBackend, JournalStorage
 import pandas as pd
 import pytest
 import yaml
@@ -39,18 +40,30 @@ def test_two_tiny_trials_from_the_command_line(tmp_path):
     assert done.returncode == 0, done.stderr[-2000:]
     assert "best trial" in done.stdout + done.stderr
     results = yaml.safe_load((sweep / "optimization_results.yaml").read_text())
-    assert results["n_complete"] == 2 and len(results["trials"]) == 2
+    assert results["complete"] == 2 and len(results["trials"]) == 2
     values = [t["value"] for t in results["trials"]]
     assert results["best_value"] == max(values)  # maximised: the validation score
     assert results["best_overrides"][0] == "model=resmlp" and not any("hparams_search" in o for o in results["best_overrides"])
     lrs = [t["params"]["model.lr"] for t in results["trials"]]
     assert lrs[0] != lrs[1] and all(1e-4 <= lr <= 3e-3 for lr in lrs)
-    study = optuna.load_study(study_name="search", storage=f"sqlite:///{sweep / 'study.db'}")
+    study = optuna.load_study(study_name="search", storage=JournalStorage(JournalFileBackend(str(sweep / "study.log"))))
     assert [t.value for t in study.trials] == values
     jobs = pd.read_csv(sweep / "jobs.csv")  # the trials in the sweep's Pareto report
     assert sorted(jobs["job"].astype(str)) == ["0", "1"] and (jobs["status"] == "ok").all()
     assert sorted(jobs["val_score"]) == pytest.approx(sorted(values))
     assert "fit time" in (sweep / "pareto.md").read_text()
+    assert results["best_job_folder"] == str(sweep / str(results["best_trial"])) and not results["partial"]
+    board = sweep / "tensorboard"  # the study's HPARAMS view: one session per trial
+    assert sorted(p.name for p in board.iterdir()) == ["trial_0000", "trial_0001"]
+
+
+def test_a_storage_that_is_neither_journal_nor_url_is_one_line(tmp_path):
+    done = subprocess.run([sys.executable, "train.py", "-m", "hparams_search=resmlp_optuna",
+                           "hydra.sweeper.storage=studies/x.db", f"hydra.sweep.dir={tmp_path / 'sweep'}"],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300, check=False)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert done.stderr.startswith("error: hydra.sweeper.storage=studies/x.db: neither a journal file")
+    assert not (tmp_path / "sweep").exists()
 
 
 def test_trial_labels_are_short_but_never_merge_two_trials():

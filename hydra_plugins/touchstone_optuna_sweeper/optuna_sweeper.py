@@ -1,14 +1,16 @@
-"""A TPE search as a Hydra sweeper: `python train.py -m hparams_search=<name>`.
+"""A TPE search as a Hydra sweeper: `python train.py -m hparams_search=<name>`, by one process or
+by many workers sharing a study (`hydra.sweeper.study_name=<name>`; docs/cluster.md).
 
 The search space is declared with Hydra's own sweep syntax in `hydra.sweeper.params` (or on the
 command line): `choice(a, b)` -> categorical, `range(lo, hi[, step])` -> integers lo..hi-1,
 `interval(lo, hi)` -> a float, `tag(log, interval(lo, hi))` -> a float on a log scale; anything
-else is a fixed override passed to every trial. Each trial is one ordinary job of the launcher
-(folder <sweep dir>/<trial number>, its metrics.json in the sweep's Pareto report); the value
-told to Optuna is what the task returns (train.py: the validation score; a failed trial is
-marked failed, never scored). The study lives in <sweep dir>/study.db (SQLite; reload it with
-optuna.load_study(study_name="search", storage="sqlite:///<sweep dir>/study.db")), and the
-best configuration is logged and written to <sweep dir>/optimization_results.yaml.
+else is a fixed override passed to every trial. Each trial is one ordinary job of the launcher,
+in the folder <this worker's sweep dir>/<trial number> (numbers are the study's, unique across
+its workers); the value told to Optuna is what the task returns (train.py: the validation score;
+a failed trial is marked failed, never scored). The study lives in the storage of
+study_storage.py; its budget (study_budget.py), lost trials (lost_trials.py) and report
+(study_report.py) are the study's, not this process's. The best configuration is logged and
+written to <sweep dir>/optimization_results.yaml with its job folder, wherever that lies.
 
 TPE: Bergstra et al., "Algorithms for hyper-parameter optimization", NeurIPS 2011; Optuna:
 Akiba et al., KDD 2019. Written over Optuna's ask-and-tell interface (study.ask(distributions),
@@ -17,6 +19,9 @@ sweep(arguments) launches batches of override lists.
 """
 import logging
 import math
+import sys
+import time
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +38,13 @@ from hydra.errors import HydraException
 from hydra.plugins.sweeper import Sweeper
 from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, OmegaConf
+
+from common.errors import InputError
+from hydra_plugins.touchstone_optuna_sweeper.lost_trials import Heartbeat, fail_lost_trials, record_job, requeuing
+from hydra_plugins.touchstone_optuna_sweeper.study_budget import budget_left, is_surplus, mark_surplus, progress
+from hydra_plugins.touchstone_optuna_sweeper.study_report import RESULTS, study_results, write_study_report
+from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, storage_location
+from hydra_plugins.touchstone_optuna_sweeper.trial_seeded_sampler import TrialSeededTPESampler
 
 log = logging.getLogger(__name__)
 
@@ -67,9 +79,12 @@ def split_space(overrides: list[Override]):
 
 class OptunaTPESweeper(Sweeper):
     def __init__(self, n_trials: int, n_jobs: int, direction: str, seed: int, n_startup_trials: int,
-                 study_name: str, storage: str | None, params: dict | None = None) -> None:
+                 study_name: str | None, storage: str | None, heartbeat_interval: int, lost_trial_retries: int,
+                 params: dict | None = None) -> None:
         self.n_trials, self.n_jobs, self.direction, self.seed = n_trials, n_jobs, direction, seed
         self.n_startup_trials, self.study_name, self.storage = n_startup_trials, study_name, storage
+        self.heartbeat_interval, self.lost_trial_retries = heartbeat_interval, lost_trial_retries
+        self.retry_lost = requeuing(lost_trial_retries)
         self.params = dict(params or {})
         self.hydra_context: HydraContext | None = None
         self.config: DictConfig | None = None
@@ -81,61 +96,116 @@ class OptunaTPESweeper(Sweeper):
             hydra_context=hydra_context, task_function=task_function, config=config)
 
     def sweep(self, arguments: list[str]) -> Any:
-        if self.n_trials < 1 or self.n_jobs < 1:
-            raise HydraException(f"hydra.sweeper.n_trials and n_jobs must be positive, got {self.n_trials}, {self.n_jobs}")
+        try:
+            fixed, space, study, storage, location = self._join(arguments)
+        except InputError as error:  # a wrong setting or an unreachable storage: one line, exit 2, nothing written
+            print(f"error: {error}", file=sys.stderr)
+            sys.exit(2)
         sweep_dir = Path(self.config.hydra.sweep.dir)
         sweep_dir.mkdir(parents=True, exist_ok=True)
         OmegaConf.save(self.config, sweep_dir / "multirun.yaml")
-        parser = OverridesParser.create(config_loader=self.hydra_context.config_loader)
-        declared = [f"{key}={value}" for key, value in self.params.items()]
-        fixed, space = split_space(parser.parse_overrides(declared + list(arguments)))
-        if not space:
-            raise HydraException("nothing to search: declare hydra.sweeper.params (choice/range/interval)")
-        storage = self.storage or f"sqlite:///{(sweep_dir / 'study.db').resolve()}"
-        sampler = optuna.samplers.TPESampler(seed=self.seed, n_startup_trials=self.n_startup_trials)
-        optuna.logging.set_verbosity(optuna.logging.WARNING)
-        study = optuna.create_study(study_name=self.study_name, storage=storage, sampler=sampler,
-                                    direction=self.direction, load_if_exists=True)
-        log.info("Optuna TPE search: %d trials over %s (study in %s)", self.n_trials, ", ".join(space), storage)
-        returns, launched = [], 0
-        while launched < self.n_trials:
-            trials = [study.ask(space) for _ in range(min(self.n_jobs, self.n_trials - launched))]
-            batch = [fixed + [f"{key}={trial.params[key]}" for key in space] for trial in trials]
+        log.info("Optuna TPE search: study %r (%s), %d trials in the study over %s; this worker's jobs in %s",
+                 study.study_name, location, self.n_trials, ", ".join(space), sweep_dir)
+        returns, ran, bookkeeping_s = [], 0, 0.0
+        while True:
+            started = time.perf_counter()
+            for number in fail_lost_trials(study, self.retry_lost):
+                log.warning("trial %d: its worker is gone (killed?); marked failed%s", number,
+                            ", re-queued" if self.lost_trial_retries else "")
+            trials = self._ask(study, space, sweep_dir)
+            if not trials:
+                break
+            batch = [fixed + [f"{key}={trial.params[key]}" for key in space] + [f"hydra.sweep.subdir={trial.number}"]
+                     for trial in trials]
             self.validate_batch_is_legal(batch)
-            results = self.launcher.launch(batch, initial_job_idx=launched)
+            bookkeeping_s += time.perf_counter() - started
+            with Heartbeat(storage, trials, self.heartbeat_interval):
+                results = self.launcher.launch(batch, initial_job_idx=trials[0].number)
+            started = time.perf_counter()
             for trial, result in zip(trials, results):
-                try:
-                    value = float(result.return_value)
-                except Exception as error:  # noqa: BLE001 - any job failure is recorded as a failed trial
-                    log.warning("trial %d failed: %s", trial.number, str(error).splitlines()[0] if str(error) else error)
-                    value = math.nan
-                if math.isfinite(value):
-                    study.tell(trial, value)
-                else:
-                    study.tell(trial, state=optuna.trial.TrialState.FAIL)
-                log.info("trial %d/%d: %s -> %s", trial.number + 1, self.n_trials, trial.params, value)
-            launched += len(trials)
+                self._tell(study, trial, result)
+            bookkeeping_s += time.perf_counter() - started
+            ran += len(trials)
             returns.append(results)
-        self._report(study, fixed, sweep_dir)
+        fail_lost_trials(study, self.retry_lost)
+        self._report(study, fixed, location, sweep_dir, ran, bookkeeping_s)
         return returns
 
-    def _report(self, study: optuna.Study, fixed: list[str], sweep_dir: Path) -> None:
-        complete = [t for t in study.trials if t.state == optuna.trial.TrialState.COMPLETE]
-        results = {"study_name": study.study_name, "direction": self.direction, "n_trials": len(study.trials),
-                   "n_complete": len(complete), "trials": [
-                       {"number": t.number, "state": t.state.name, "value": t.value, "params": dict(t.params)}
-                       for t in study.trials]}
-        if complete:
-            best = study.best_trial
+    def _join(self, arguments: list[str]):
+        """(fixed overrides, search space, study, storage, its location): the study joined or created."""
+        if self.n_trials < 1 or self.n_jobs < 1 or self.heartbeat_interval < 1 or self.lost_trial_retries < 0:
+            raise InputError(f"hydra.sweeper: n_trials, n_jobs and heartbeat_interval must be positive, "
+                             f"lost_trial_retries >= 0; got {self.n_trials}, {self.n_jobs}, "
+                             f"{self.heartbeat_interval}, {self.lost_trial_retries}")
+        parser = OverridesParser.create(config_loader=self.hydra_context.config_loader)
+        declared = [f"{key}={value}" for key, value in self.params.items()]
+        try:
+            fixed, space = split_space(parser.parse_overrides(declared + list(arguments)))
+        except HydraException as error:
+            raise InputError(str(error).splitlines()[0]) from None
+        if not space:
+            raise InputError("nothing to search: declare hydra.sweeper.params (choice/range/interval)")
+        location = storage_location(self.storage, self.study_name, Path(self.config.hydra.sweep.dir))
+        storage = open_storage(location, self.heartbeat_interval, self.retry_lost)
+        optuna.logging.set_verbosity(optuna.logging.WARNING)
+        definition = {"direction": self.direction, "n_trials": self.n_trials, "seed": self.seed,
+                      "n_startup_trials": self.n_startup_trials, "fixed": sorted(fixed),
+                      "space": {k: optuna.distributions.distribution_to_json(d) for k, d in sorted(space.items())}}
+        study = join_study(storage, self.study_name or "search", TrialSeededTPESampler(self.seed, self.n_startup_trials),
+                           self.direction, definition)
+        return fixed, space, study, storage, location
+
+    def _ask(self, study: optuna.Study, space: dict, sweep_dir: Path) -> list[optuna.Trial]:
+        """Up to n_jobs trials while the study's budget lasts, each marked with its job folder and worker."""
+        trials = []
+        while len(trials) < self.n_jobs and budget_left(study.get_trials(deepcopy=False), self.n_trials):
+            with warnings.catch_warnings():  # Optuna warns that its heartbeat expects study.optimize()
+                warnings.simplefilter("ignore", UserWarning)
+                trial = study.ask(space)
+            if is_surplus(trial.number, study.get_trials(deepcopy=False), self.n_trials):
+                mark_surplus(study, trial)  # other workers took the last trials at the same moment
+                break
+            record_job(trial, str((sweep_dir / str(trial.number)).absolute()))
+            trials.append(trial)
+        return trials
+
+    def _tell(self, study: optuna.Study, trial: optuna.Trial, result) -> None:
+        try:
+            value = float(result.return_value)
+        except Exception as error:  # noqa: BLE001 - any job failure is recorded as a failed trial
+            log.warning("trial %d failed: %s", trial.number, str(error).splitlines()[0] if str(error) else error)
+            value = math.nan
+        try:
+            if math.isfinite(value):
+                study.tell(trial, value)
+            else:
+                study.tell(trial, state=optuna.trial.TrialState.FAIL)
+        except (RuntimeError, ValueError) as error:  # UpdateFinishedTrialError: another worker failed it
+            log.warning("trial %d: not recorded, another worker marked it failed while it ran (%s)", trial.number,
+                        str(error).splitlines()[0])
+        counts = progress(study.get_trials(deepcopy=False))
+        log.info("trial %d: %s -> %s (study %r: %d of %d trials taken, %d complete, %d failed, %d running)",
+                 trial.number, trial.params, value, study.study_name, counts["counted"], self.n_trials,
+                 counts["complete"], counts["failed"], counts["running"])
+
+    def _report(self, study: optuna.Study, fixed: list[str], location: str, sweep_dir: Path, ran: int,
+                bookkeeping_s: float) -> None:
+        results = study_results(study, self.n_trials, location)
+        results["this_worker"] = {"sweep_dir": str(sweep_dir.absolute()), "trials_run": ran,
+                                  "bookkeeping_ms_per_trial": round(1e3 * bookkeeping_s / max(ran, 1), 2)}
+        if "best_trial" in results:
             # a plain run of the winner: the search config's choices without the search itself
             choices = self.config.hydra.runtime.choices
             plain = [f"{group}={choices[group]}" for group in ("model",) if choices.get(group)]
             plain += [o for o in fixed if "hparams_search" not in o.split("=", 1)[0]]
-            overrides = plain + [f"{key}={value}" for key, value in best.params.items()]
-            results.update(best_trial=best.number, best_value=best.value, best_params=dict(best.params),
-                           best_overrides=overrides)
-            log.info("best trial %d (job folder %s): validation score %.6g; rerun it with: python train.py %s",
-                     best.number, sweep_dir / str(best.number), best.value, " ".join(overrides))
+            results["best_overrides"] = plain + [f"{key}={value}" for key, value in results["best_params"].items()]
+            log.info("best trial %d of study %r (job folder %s): validation score %.6g; rerun it with: python train.py %s",
+                     results["best_trial"], study.study_name, results["best_job_folder"], results["best_value"],
+                     " ".join(results["best_overrides"]))
         else:
-            log.warning("no trial completed; see the job folders' error.txt")
-        OmegaConf.save(OmegaConf.create(results), sweep_dir / "optimization_results.yaml")
+            log.warning("no trial of the study completed; see the job folders' error.txt")
+        launcher = str(self.config.hydra.launcher.get("_target_", ""))
+        write_study_report(sweep_dir, results, parallel=results["workers"] > 1 or "joblib" in launcher.lower())
+        log.info("study report in %s%s", sweep_dir / RESULTS, (
+            f" (partial: {results['running']} trials running, {results['waiting']} waiting in other workers)"
+            if results["partial"] else ""))

@@ -2,7 +2,9 @@
 jobs.csv (one row per job).
 
 A Hydra callback (`on_multirun_end`, registered in configs/hydra/default.yaml) reads every
-job's metrics.json in the sweep folder; by hand: `python -m runs.report.pareto <sweep dir>`.
+job's metrics.json in the sweep folder; by hand: `python -m runs.report.pareto <sweep dir>`. A
+hyper-parameter search reports its whole study instead, whichever worker ran each trial: its
+sweeper passes the trials' job folders (hydra_plugins/touchstone_optuna_sweeper/study_report.py).
 
 Choose on validation, report on test: the score that ranks configurations and marks the front
 is the VALIDATION score (R^2 averaged over targets for regression, accuracy for
@@ -33,12 +35,17 @@ log = logging.getLogger(__name__)
 MEASURES = ("val_score", "test_score", "fit_time_s", "latency_p50_us", "model_size_bytes")
 
 
-def _job_row(folder: Path) -> dict:
-    overrides = yaml.safe_load((folder / ".hydra" / "overrides.yaml").read_text()) or []
+def _job_row(name: str, folder: Path) -> dict:
+    overrides_file = folder / ".hydra" / "overrides.yaml"
+    if not overrides_file.is_file():  # a study's trial run on another machine's disk, or not begun
+        return {"job": name, "folder": str(folder), "overrides": [], "status": "missing",
+                "error": f"{folder}: no job folder here"}
+    overrides = yaml.safe_load(overrides_file.read_text()) or []
     status = run_status(folder)
     if status.state != "finished":  # failed, interrupted, still running: its files, if any, are not a result
-        return {"job": folder.name, "overrides": overrides, "status": status.state, "error": status.reason}
-    row = {"job": folder.name, "overrides": overrides, "status": "ok"}
+        return {"job": name, "folder": str(folder), "overrides": overrides, "status": status.state,
+                "error": status.reason}
+    row = {"job": name, "folder": str(folder), "overrides": overrides, "status": "ok"}
     metrics = json.loads((folder / "metrics.json").read_text())
     regression = "r2" in metrics["val"].get("average", {})
     score = (lambda split: split["average"]["r2"]) if regression else (lambda split: split["accuracy"])
@@ -96,11 +103,21 @@ def _labels(pairs: list[dict]) -> list[str]:
     return rounded if len(set(rounded)) == len(set(full)) else full
 
 
-def collect_jobs(sweep_dir) -> pd.DataFrame:
-    sweep_dir = Path(sweep_dir)
-    folders = sorted((f for f in sweep_dir.iterdir() if (f / ".hydra" / "overrides.yaml").is_file()),
+def sweep_jobs(sweep_dir) -> dict[str, Path]:
+    """The job folders of one sweep, by name (its job numbers), in order."""
+    folders = sorted((f for f in Path(sweep_dir).iterdir() if (f / ".hydra" / "overrides.yaml").is_file()),
                      key=lambda f: (len(f.name), f.name))
-    rows = [_job_row(f) for f in folders]
+    return {f.name: f for f in folders}
+
+
+def collect_jobs(sweep_dir) -> pd.DataFrame:
+    """One row per job folder of the sweep."""
+    return job_table(sweep_jobs(sweep_dir))
+
+
+def job_table(jobs: dict[str, Path]) -> pd.DataFrame:
+    """One row per job (name -> folder)."""
+    rows = [_job_row(name, Path(folder)) for name, folder in jobs.items()]
     frame = pd.DataFrame(rows)
     if frame.empty:
         return frame
@@ -142,9 +159,11 @@ def _mean_sd(row, column, fmt) -> str:
     return format(mean, fmt) + (f" ± {format(sd, fmt)}" if np.isfinite(sd) else "")
 
 
-def markdown(summary: pd.DataFrame, jobs: pd.DataFrame, parallel_warning: bool) -> str:
+def markdown(summary: pd.DataFrame, jobs: pd.DataFrame, parallel_warning: bool, note: str = "") -> str:
     metric = summary["score_metric"].iloc[0] if len(summary) else "score"
     lines = [f"# Accuracy vs cost: validation {metric} ranks and marks the front; test is for reporting only", ""]
+    if note:
+        lines += [f"> {note}", ""]
     if parallel_warning:
         lines += ["> Jobs ran in parallel: they competed for the cores, so fit times and latencies are",
                   "> perturbed. Rerun the sweep with the basic launcher to compare timings.", ""]
@@ -160,18 +179,25 @@ def markdown(summary: pd.DataFrame, jobs: pd.DataFrame, parallel_warning: bool) 
                      f"| {'★' if r['pareto_fit_time'] else ''} | {'★' if r['pareto_latency'] else ''} |")
     failed = jobs[jobs["status"] != "ok"]
     if len(failed):
-        lines += ["", "Failed jobs (and any interrupted or still running; not counted above):", ""]
+        lines += ["", "Failed jobs (and any interrupted, still running or missing; not counted above):", ""]
         lines += [f"- job {r['job']} ({r['overrides']}): {r['status']}: {r['error']}" for _, r in failed.iterrows()]
     return "\n".join(lines) + "\n"
+
+
+COSTS = (("fit_time_s", "pareto_fit_time", "fit time (s)"),
+         ("latency_p50_us", "pareto_latency", "batch-1 latency p50 (µs)"))
+
+
+def measured_costs(summary: pd.DataFrame) -> list[tuple]:
+    """The costs that some configuration measured: a panel each (no latency measured: no empty panel)."""
+    return [cost for cost in COSTS if np.isfinite(summary[f"{cost[0]}_mean"].astype(float)).any()]
 
 
 def figure(summary: pd.DataFrame):
     from runs.report.plots import panel_grid, readable_log_axis
 
     metric = summary["score_metric"].iloc[0]
-    costs = [(cost, front, title) for cost, front, title in (
-        ("fit_time_s", "pareto_fit_time", "fit time (s)"), ("latency_p50_us", "pareto_latency", "batch-1 latency p50 (µs)"))
-        if np.isfinite(summary[f"{cost}_mean"].astype(float)).any()]   # no latency measured: no empty panel
+    costs = measured_costs(summary)
     fig, axes = panel_grid(len(costs), panel_width=6.5, panel_height=5.0)
     for ax, (cost, front, title) in zip(axes, costs):
         points = summary[np.isfinite(summary[f"{cost}_mean"].astype(float))]
@@ -191,17 +217,19 @@ def figure(summary: pd.DataFrame):
     return fig
 
 
-def write_report(sweep_dir, parallel: bool = False) -> pd.DataFrame:
+def write_report(sweep_dir, jobs: dict[str, Path] | None = None, parallel: bool = False, note: str = "") -> pd.DataFrame:
+    """The report of `jobs` (name -> folder; default: the sweep's own job folders) into `sweep_dir`;
+    `note` heads pareto.md (a search's study still running elsewhere says so)."""
     sweep_dir = Path(sweep_dir)
-    jobs = collect_jobs(sweep_dir)
+    jobs = collect_jobs(sweep_dir) if jobs is None else job_table(jobs)
     if jobs.empty:
         log.warning("no jobs found in %s", sweep_dir)
         return jobs
     summary = summarise(jobs)
     atomic_write(sweep_dir / "jobs.csv", lambda tmp: jobs.to_csv(tmp, index=False))
     atomic_write(sweep_dir / "pareto.csv", lambda tmp: summary.to_csv(tmp, index=False))
-    atomic_write_text(sweep_dir / "pareto.md", markdown(summary, jobs, parallel))
-    if len(summary):
+    atomic_write_text(sweep_dir / "pareto.md", markdown(summary, jobs, parallel, note))
+    if len(summary) and measured_costs(summary):
         fig = figure(summary)
         atomic_write(sweep_dir / "pareto.png", lambda tmp: fig.savefig(tmp, dpi=110, format="png"))
     log.info("Pareto report of %d jobs (%d not finished) in %d configurations in %s", len(jobs),
@@ -210,9 +238,12 @@ def write_report(sweep_dir, parallel: bool = False) -> pd.DataFrame:
 
 
 class ParetoCallback(Callback):
-    """Writes the Pareto report when a multirun ends."""
+    """Writes the Pareto report when a multirun ends; a hyper-parameter search has written its
+    study's report itself (its trials live in several workers' sweep folders)."""
 
     def on_multirun_end(self, config, **kwargs) -> None:
+        if "touchstone_optuna_sweeper" in str(config.hydra.sweeper.get("_target_", "")):
+            return
         launcher = str(config.hydra.launcher.get("_target_", ""))
         write_report(config.hydra.sweep.dir, parallel="joblib" in launcher.lower())
 
