@@ -27,7 +27,7 @@ import torch
 from common.errors import InputError
 from common.progress import progress
 from export.onnx_predictor import OnnxPredictor
-from models.deployable import RegressionPipeline
+from models.deployable import TimeSeriesPipeline
 
 log = logging.getLogger(__name__)
 
@@ -79,7 +79,7 @@ def single_job(model, seen=None) -> int:
 
 def _onnx_call(pipeline, model_path, threads: int):
     predictor = OnnxPredictor(model_path, threads=threads)
-    return predictor.predict_array if isinstance(pipeline, RegressionPipeline) else predictor.predict_windows
+    return predictor.predict_windows if isinstance(pipeline, TimeSeriesPipeline) else predictor.predict_array
 
 
 def measure(pipeline, model_path=None, budget_s: float = 1.0, compare: bool = True, calls: int = 100) -> dict:

@@ -5,8 +5,12 @@ normalisation, for models trained on normalised channels) -> physics features an
 -> the model(s) -> `prediction` [batch, n_targets] in units, and for models with calibrated
 intervals `interval_half_width` (the conformal scale times sigma_total, eq. 21-24, computed in
 the graph from the fold models' spread, the candidates' disagreement and sigma_data).
-Time series: `window` [batch, channels, steps] float32 raw window -> `probabilities`.
-Metadata describe the inputs and outputs so the predict side can check a file against them.
+Classification table: `channels` as for regression -> the same front end -> the classifier's
+probabilities, temperature-calibrated (models/classic_classifiers.py) -> `probabilities`
+[batch, n_classes]. Time series: `window` [batch, channels, steps] float32 raw window ->
+`probabilities`. Metadata describe the inputs and outputs so the predict side can check a file
+against them: `kind` (regression or classification), `input` (channels or window), `channels`,
+`outputs`, and `targets` / `classes` (with `label`, the target column, for a table classifier).
 """
 import json
 import tomllib
@@ -19,11 +23,11 @@ from onnx import TensorProto
 
 from export.graph_builder import GraphBuilder, tensor
 from export.torch_graphs import RegressionFrontEnd, ResMLPInUnits, WindowClassifier, to_onnx
-from export.sklearn_graphs import classic_to_onnx
+from export.sklearn_graphs import classic_to_onnx, table_classifier_to_onnx
 from export.tree_graphs import tree_to_onnx
 from models.classic_regressors import ClassicRegressor
 from models.kfold_blend import KFoldBlend
-from models.deployable import RegressionPipeline, TimeSeriesPipeline
+from models.deployable import RegressionPipeline, TableClassifierPipeline, TimeSeriesPipeline
 from models.resmlp_regressor import ResMLPRegressor
 from models.weighted_blend import ValidationWeightedBlend
 from models.trees import TreeRegressor
@@ -58,13 +62,27 @@ def _mean_and_model_variance(builder, model, features, n_features, n_targets, op
     return _leaf(builder, model, features, n_features, n_targets, opset, prefix), None
 
 
+def _table_front(builder, pipeline, opset) -> str:
+    """Raw `channels` -> (normalisation) -> physics features, standardised: the `features` tensor."""
+    front = to_onnx(RegressionFrontEnd(pipeline.feature_groups, pipeline.scaler_mean, pipeline.scaler_scale,
+                                       pipeline.normalisation),
+                    torch.ones(2, len(pipeline.channel_names), dtype=torch.float64), "channels", "features", opset)
+    return builder.add_model(front, {"channels": "channels"}, "front")["features"]
+
+
+def table_classifier_graph(pipeline: TableClassifierPipeline, opset: int, metadata: dict) -> onnx.ModelProto:
+    builder = GraphBuilder(opset)
+    features = _table_front(builder, pipeline, opset)
+    proto = table_classifier_to_onnx(pipeline.model, len(pipeline.feature_names), opset)
+    builder.identity(builder.add_model(proto, {"features": features}, "model")["probabilities"], "probabilities")
+    return builder.build([tensor("channels", ["batch", len(pipeline.channel_names)], TensorProto.DOUBLE)],
+                         [tensor("probabilities", ["batch", len(pipeline.classes)])], metadata)
+
+
 def regression_graph(pipeline: RegressionPipeline, opset: int, metadata: dict) -> onnx.ModelProto:
     n_channels, n_features, n_targets = len(pipeline.channel_names), len(pipeline.feature_names), len(pipeline.target_names)
     builder = GraphBuilder(opset)
-    front = to_onnx(RegressionFrontEnd(pipeline.feature_groups, pipeline.scaler_mean, pipeline.scaler_scale,
-                                       pipeline.normalisation),
-                    torch.ones(2, n_channels, dtype=torch.float64), "channels", "features", opset)
-    features = builder.add_model(front, {"channels": "channels"}, "front")["features"]
+    features = _table_front(builder, pipeline, opset)
     model = pipeline.model
     outputs = [tensor("prediction", ["batch", n_targets])]
     if isinstance(model, ValidationWeightedBlend):
@@ -126,6 +144,10 @@ def metadata_for(pipeline, config_hash: str, opset: int) -> dict[str, str]:
         return {**common, "kind": "regression", "input": "channels", "targets": json.dumps(pipeline.target_names),
                 "target_units": json.dumps(units), "features": json.dumps(pipeline.feature_names),
                 "outputs": json.dumps(["prediction"] + (["interval_half_width"] if hasattr(pipeline.model, "conformal_scale_") else []))}
+    if isinstance(pipeline, TableClassifierPipeline):
+        return {**common, "kind": "classification", "input": "channels", "label": pipeline.label,
+                "classes": json.dumps(pipeline.classes), "features": json.dumps(pipeline.feature_names),
+                "outputs": json.dumps(["probabilities"])}
     return {**common, "kind": "classification", "input": "window", "classes": json.dumps(pipeline.classes),
             "window_steps": str(pipeline.raw_length), "decimate": str(pipeline.decimate),
             # the rate of the raw windows the graph takes, as the data declared it; unknown when they did not
@@ -138,4 +160,6 @@ def export_pipeline(pipeline, opset: int, config_hash: str) -> onnx.ModelProto:
     metadata = metadata_for(pipeline, config_hash, opset)
     if isinstance(pipeline, RegressionPipeline):
         return regression_graph(pipeline, opset, metadata)
+    if isinstance(pipeline, TableClassifierPipeline):
+        return table_classifier_graph(pipeline, opset, metadata)
     return timeseries_graph(pipeline, opset, metadata)

@@ -11,15 +11,20 @@ training rows of kernel values times weights that cancel (shared/notes/facts.md:
 float32; a GP is the opposite case). The pieces' standardised outputs are concatenated and
 turned back into units with the training targets' mean and spread, as
 ClassicRegressor.predict does.
+
+A table's classifier (models/classic_classifiers.py) goes through skl2onnx whole (trees, MLP,
+logistic regression: float32, as the trees compute), its probabilities then temperature-scaled
+as TableClassifier.predict_proba does: softmax(beta * log(p + EPS)).
 """
 import numpy as np
 import onnx
 from onnx import TensorProto
 from skl2onnx import convert_sklearn
-from skl2onnx.common.data_types import DoubleTensorType
+from skl2onnx.common.data_types import DoubleTensorType, FloatTensorType
 from sklearn.gaussian_process import GaussianProcessRegressor
 
 from export.graph_builder import GraphBuilder, tensor
+from models.classic_classifiers import EPS, TableClassifier
 from models.classic_regressors import ClassicRegressor
 
 
@@ -60,3 +65,20 @@ def classic_to_onnx(regressor, n_features: int, n_targets: int, opset: int) -> o
     units = builder.op("Add", [builder.op("Mul", [standardised, scale]), mean])
     builder.identity(builder.op("Cast", [units], to=TensorProto.FLOAT), "y")
     return builder.build([tensor("features", ["batch", n_features])], [tensor("y", ["batch", n_targets])], {})
+
+
+def table_classifier_to_onnx(classifier, n_features: int, opset: int) -> onnx.ModelProto:
+    """One ONNX model `features` [batch, n_features] float32 -> `probabilities` [batch, n_classes]
+    float32, calibrated, for a fitted TableClassifier."""
+    if not isinstance(classifier, TableClassifier):
+        raise TypeError(f"no ONNX exporter for {type(classifier).__name__}")
+    estimator = classifier.estimator_
+    proto = convert_sklearn(estimator, initial_types=[("features", FloatTensorType([None, n_features]))],
+                            target_opset={"": opset, "ai.onnx.ml": 3}, options={id(estimator): {"zipmap": False}})
+    builder = GraphBuilder(opset)
+    raw = builder.add_model(proto, {"features": "features"}, "classifier")["probabilities"]
+    logits = builder.op("Log", [builder.op("Add", [raw, builder.const(np.array(EPS, dtype=np.float32), "eps")])])
+    scaled = builder.op("Mul", [logits, builder.const(np.array(classifier.temperature_beta_, dtype=np.float32), "beta")])
+    builder.identity(builder.op("Softmax", [scaled], axis=1), "probabilities")
+    n_classes = len(classifier.classes_)
+    return builder.build([tensor("features", ["batch", n_features])], [tensor("probabilities", ["batch", n_classes])], {})

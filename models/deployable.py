@@ -52,6 +52,28 @@ class RegressionPipeline:
 
 
 @dataclass
+class TableClassifierPipeline:
+    """A classification table's model: raw channel readings -> features -> class probabilities
+    (models/classic_classifiers.py, calibrated)."""
+    channel_names: list[str]
+    label: str               # the target column whose classes it predicts
+    classes: list[str]
+    feature_groups: list[str]
+    feature_names: list[str]
+    scaler_mean: np.ndarray
+    scaler_scale: np.ndarray
+    model: object
+    description: dict = field(default_factory=dict)
+    examples: np.ndarray | None = None  # raw test-split readings: latency measurements
+
+    features = RegressionPipeline.features   # the same front end (no normalisation: a user's raw table)
+    normalisation = None
+
+    def predict_raw(self, readings) -> np.ndarray:
+        return self.model.predict_proba(self.features(readings))
+
+
+@dataclass
 class TimeSeriesPipeline:
     channel_names: list[str]
     classes: list[str]
@@ -93,6 +115,14 @@ def regression_pipeline(datamodule, model) -> RegressionPipeline:
                               {"source": table.description}, examples, table.normalisation)
 
 
+def table_classifier_pipeline(datamodule, model) -> TableClassifierPipeline:
+    return TableClassifierPipeline(list(datamodule.channel_names), datamodule.label, list(datamodule.classes),
+                                   enabled_groups(datamodule.features), list(datamodule.feature_names),
+                                   datamodule.scaler.mean_.copy(), datamodule.scaler.scale_.copy(), model,
+                                   {"source": datamodule.table.description},
+                                   datamodule.table.channels[datamodule.test_idx].copy())
+
+
 def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:
     calibration = None
     if datamodule.force_calibration:
@@ -116,6 +146,6 @@ def save_pipeline(pipeline, path) -> Path:
 def load_pipeline(path):
     """A saved pipeline; InputError (one line) for a file that is not one."""
     pipeline = load_fitted(path)
-    if not isinstance(pipeline, (RegressionPipeline, TimeSeriesPipeline)):
+    if not isinstance(pipeline, (RegressionPipeline, TableClassifierPipeline, TimeSeriesPipeline)):
         raise InputError(f"{path}: holds a {type(pipeline).__name__}, not a deployable pipeline")
     return pipeline

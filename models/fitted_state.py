@@ -60,10 +60,12 @@ ALLOWED_CLASSES = frozenset({
     # what a run deploys, and our estimators and networks
     "models.deployable.RegressionPipeline",
     "models.deployable.TimeSeriesPipeline",
+    "models.deployable.TableClassifierPipeline",
     "data.preprocessing.minmax_scaling.MinMaxScaling",
     "models.resmlp_regressor.ResMLPRegressor",
     "models.trees.TreeRegressor",
     "models.classic_regressors.ClassicRegressor",
+    "models.classic_classifiers.TableClassifier",
     "models.kfold_blend.KFoldBlend",
     "models.weighted_blend.ValidationWeightedBlend",
     "models.timeseries_classifier.TimeSeriesClassifier",
@@ -105,6 +107,14 @@ ALLOWED_CLASSES = frozenset({
     "sklearn.gaussian_process.kernels.RBF",
     "sklearn.gaussian_process.kernels.Sum",
     "sklearn.gaussian_process.kernels.WhiteKernel",
+    "sklearn.ensemble._forest.ExtraTreesClassifier",
+    "sklearn.ensemble._forest.RandomForestClassifier",
+    "sklearn.tree._classes.DecisionTreeClassifier",
+    "sklearn.tree._classes.ExtraTreeClassifier",
+    "sklearn.linear_model._logistic.LogisticRegression",
+    "sklearn.neural_network._multilayer_perceptron.MLPClassifier",
+    "sklearn.neural_network._stochastic_optimizers.AdamOptimizer",
+    "sklearn.preprocessing._label.LabelBinarizer",
 })
 # Listed classes that pickle rebuilds by calling them with arguments (their sizes), not by __new__
 CALLED_CLASSES = frozenset({"sklearn.tree._tree.Tree"})

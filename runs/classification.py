@@ -1,22 +1,42 @@
-"""One classification run on time-series windows, top to bottom: fit, predict, score -> one
-result; then the report side (runs/report/classification_report.py) writes it once.
+"""One classification run, top to bottom: fit, predict, score -> one result; then the report side
+(runs/report/classification_report.py) writes it once. Two kinds of data come here: time-series
+windows (recordings: the networks of models/timeseries_classifier.py) and classification tables
+(one row per press, its target a class label: models/classic_classifiers.py).
 
 Reports what the seed paper reports (accuracy, validation loss, parameter count) plus macro-F1,
 per-class accuracy, accuracy per force level, fit time, confusion matrices (PNG and TensorBoard)
 and per-epoch curves. Choose on validation, report on test: the model sees validation windows
 for its per-epoch curves and sweeps rank runs by validation accuracy; test windows are only
 predicted once, after fitting, and scored beside validation.
+
+A table's classifier has its probabilities calibrated on the calibration rows (held out of the
+training data, grouped as the split is; validation rows when data.calibration_fraction=0), by
+temperature scaling; with fewer than MIN_CALIBRATION_ROWS it stays uncalibrated, and the log and
+metrics.json say so. Its model: a TableClassifier config (model=logistic_regression, model=mlp)
+as it is; a tree config (model=extra_trees, random_forest, decision_tree) as the classifier of
+that kind with the same settings; the default pipeline (model=blend, which only regresses) as
+the recipe's `classifier` (recipe/blend.yaml: extra trees). Other regressors are refused by name.
 """
+import logging
 import time
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 from hydra.utils import instantiate
+from omegaconf import OmegaConf
 
-from models.deployable import TimeSeriesPipeline, timeseries_pipeline
+from common.errors import InputError
+from models.classic_classifiers import TableClassifier
+from models.deployable import table_classifier_pipeline, timeseries_pipeline
 from runs.report.classification_report import write_classification_report
 from runs.report.metrics import classification_metrics
+
+log = logging.getLogger(__name__)
+MIN_CALIBRATION_ROWS = 20   # fewer: a temperature fitted on them is noise; probabilities stay as the classifier gives them
+TABLE_CLASSIFIER = "models.classic_classifiers.TableClassifier"
+TREES = "models.trees.TreeRegressor"
+REGRESSION_ONLY = "models.weighted_blend.ValidationWeightedBlend"   # the default pipeline: its recipe names a classifier
 
 
 @dataclass
@@ -25,13 +45,13 @@ class ClassificationResult:
     classes: list[str]
     y_val: np.ndarray
     proba_val: np.ndarray
-    val_window_recording: np.ndarray
+    val_ids: dict           # columns that say which sample each row is: its recording, or a table row's readings
     val_levels: np.ndarray | None
     y_test: np.ndarray
     proba_test: np.ndarray
-    test_window_recording: np.ndarray
+    test_ids: dict
     test_levels: np.ndarray | None
-    pipeline: TimeSeriesPipeline
+    pipeline: object        # models/deployable.py: TimeSeriesPipeline or TableClassifierPipeline
     hparams: dict
 
 
@@ -44,10 +64,59 @@ def checkpoint_folder(output_dir) -> Path:
     return Path(output_dir) / "checkpoint"
 
 
+def table_classifier(cfg) -> TableClassifier:
+    """The classifier a classification table fits for the configured model (the module docstring)."""
+    node = cfg.model
+    if node.get("_target_") == REGRESSION_ONLY and cfg.get("classifier") is not None:
+        node = cfg.classifier
+    target = node.get("_target_")
+    if target == TABLE_CLASSIFIER:
+        return instantiate(node)
+    if target == TREES:
+        settings = OmegaConf.to_container(node, resolve=True)
+        settings.pop("per_output", None)
+        settings["_target_"] = TABLE_CLASSIFIER
+        return instantiate(settings)
+    name = str(target).rsplit(".", 1)[-1] + (f"(kind={node.kind})" if "kind" in node else "")
+    raise InputError(f"{name} is a regression model; a classification table trains model=extra_trees, random_forest, "
+                     "decision_tree, mlp or logistic_regression")
+
+
+def _calibrate(model, datamodule) -> dict:
+    """Temperature-scale the model's probabilities on the calibration rows -> what metrics.json says of it."""
+    rows = datamodule.cal_idx if datamodule.cal_idx.size else datamodule.val_idx
+    part = "calibration" if datamodule.cal_idx.size else "validation"
+    if rows.size < MIN_CALIBRATION_ROWS:
+        note = (f"too few {part} rows to calibrate the class probabilities ({rows.size} < {MIN_CALIBRATION_ROWS}); "
+                "they are the classifier's own")
+        log.warning(note)
+        return {"method": None, "rows": int(rows.size), "note": note}
+    X_test, y_test = datamodule.test
+    before = classification_metrics(y_test, model.predict_proba(X_test), datamodule.classes)["loss"]
+    model.calibrate(datamodule.X[rows], datamodule.y[rows])
+    after = classification_metrics(y_test, model.predict_proba(X_test), datamodule.classes)["loss"]
+    log.info("class probabilities calibrated on %d %s rows (temperature scaling, beta %.3f): test log loss %.4f -> %.4f",
+             rows.size, part, model.temperature_beta_, before, after)
+    return {"method": "temperature", "rows": int(rows.size), "split": part, "temperature_beta": model.temperature_beta_,
+            "test_loss_uncalibrated": before, "test_loss": after}
+
+
+def _table_ids(datamodule, rows) -> dict:
+    """A table row's raw channel readings: predictions.csv is then a ready input for predict.py."""
+    return {name: datamodule.table.channels[rows, k] for k, name in enumerate(datamodule.channel_names)}
+
+
 def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> ClassificationResult:
     (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     summary = datamodule.summary()
-    model = instantiate(cfg.model)
+    table = hasattr(datamodule, "table")
+    if table:
+        model = table_classifier(cfg)
+    elif cfg.model.get("_target_") == TABLE_CLASSIFIER:
+        raise InputError("model.kind classifiers are for tables (one row per press); recordings train model=prcnn, "
+                         "rescnn, inceptiontime or lstm_fcn")
+    else:
+        model = instantiate(cfg.model)
     if "modalities" in model.get_params():
         model.set_params(modalities=datamodule.modality_channels)
     if "checkpoint_path" in model.get_params():  # resumable training (docs/training_recipes.md)
@@ -59,22 +128,36 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
     if "checkpoint_path" in model.get_params():  # the deployed model refits from scratch, never from this run's files
         model.set_params(checkpoint_path=None, resume_from=None)
+    calibration = _calibrate(model, datamodule) if table else None
     proba, proba_test = model.predict_proba(X_val), model.predict_proba(X_test)
-    name = type(model.module_).__name__ if hasattr(model, "module_") else type(model).__name__
+    if table:
+        name = f"{type(model).__name__}({model.kind})"
+    else:
+        name = type(model.module_).__name__ if hasattr(model, "module_") else type(model).__name__
     n_parameters = int(getattr(model, "n_parameters_", 0))
+    val_levels = getattr(datamodule, "val_levels_per_window", None)
+    test_levels = getattr(datamodule, "test_levels_per_window", None)
     metrics = {"model": name, "n_parameters": n_parameters, "fit_time_s": fit_time_s,
                "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, "n_parameters": n_parameters},
-               "val": classification_metrics(y_val, proba, datamodule.classes, datamodule.val_levels_per_window),
-               "test": classification_metrics(y_test, proba_test, datamodule.classes, datamodule.test_levels_per_window),
+               "val": classification_metrics(y_val, proba, datamodule.classes, val_levels),
+               "test": classification_metrics(y_test, proba_test, datamodule.classes, test_levels),
                "data": summary}
+    if calibration is not None:
+        metrics["calibration"] = calibration
     if hasattr(model, "best_epoch_"):  # the epoch kept (best on validation), of how many run, at what batch
         metrics["training"] = {"epochs_run": model.n_epochs_, "best_epoch": model.best_epoch_,
                                "batch_size": model.batch_size_}
-    hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed,
-               "augment": bool(datamodule.n_virtual_windows), "window": str(summary["window"])}
-    return ClassificationResult(metrics, list(datamodule.classes), y_val, proba, datamodule.val_window_recording,
-                                datamodule.val_levels_per_window, y_test, proba_test, datamodule.test_window_recording,
-                                datamodule.test_levels_per_window, timeseries_pipeline(datamodule, model), hparams)
+    hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed}
+    if table:
+        pipeline = table_classifier_pipeline(datamodule, model)
+        val_ids, test_ids = _table_ids(datamodule, datamodule.val_idx), _table_ids(datamodule, datamodule.test_idx)
+    else:
+        hparams.update(augment=bool(datamodule.n_virtual_windows), window=str(summary["window"]))
+        pipeline = timeseries_pipeline(datamodule, model)
+        val_ids = {"recording": datamodule.val_window_recording}
+        test_ids = {"recording": datamodule.test_window_recording}
+    return ClassificationResult(metrics, list(datamodule.classes), y_val, proba, val_ids, val_levels, y_test,
+                                proba_test, test_ids, test_levels, pipeline, hparams)
 
 
 def run_classification(cfg, output_dir, datamodule, logger):

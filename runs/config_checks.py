@@ -142,6 +142,8 @@ TRAINER = {
     "max_epochs": integer(1),
     "batch_size": integer(2),   # BatchNorm cannot normalise a batch of one
     "early_stopping_patience": integer(0, null=True),   # null: train every epoch
+    "early_stopping_min_patience": integer(0, null=True),   # null: the patience, fixed
+    "early_stopping_min_delta": number(0),
     "lr_plateau_patience": integer(0),
     "device": text("cpu", "cuda", r"cuda:\d+", "auto"),
     "progress": FLAG,
@@ -163,13 +165,13 @@ TRAINER = {
 # sign is export/latency.py's to refuse, where the measurement starts.
 SETTINGS = {"seed": SEED, "overwrite": FLAG, "cost.budget_s": number(), "cost.measure_latency": FLAG,
             "cost.onnx_latency_calls": integer(0),
-            "cost.onnx_latency_calls": integer(0),
             "analysis.ablation": FLAG, "analysis.progress": FLAG, "analysis.identifiability_bins": integer(1),
             "export.enabled": FLAG, "export.opset": integer(1), "export.file": text(), "augment.enabled": FLAG}
 # A parameter of one of our targets with one of these names takes these values wherever it
 # appears: the trainer's settings reach the nets under their own names, the splits the datamodules.
 PARAMETERS = {
-    **{name: TRAINER[name] for name in ("max_epochs", "batch_size", "early_stopping_patience", "lr_plateau_patience",
+    **{name: TRAINER[name] for name in ("max_epochs", "batch_size", "early_stopping_patience",
+                                        "early_stopping_min_patience", "early_stopping_min_delta", "lr_plateau_patience",
                                         "device", "progress", "lr", "momentum", "weight_decay", "lr_factor", "min_lr",
                                         "max_batch_fraction")},
     "milestones": TRAINER["lr_milestones"], "gamma": TRAINER["lr_gamma"], "seed": SEED,
@@ -401,13 +403,11 @@ def unreached_trainer_settings(raw: dict, config: dict, overrides) -> list[str]:
 
 
 def check_path_key(cfg: DictConfig) -> None:
-    """A file's path is data.path for every source; a recordings source reads it through
-    `${data.path}`, so a value set at the older data.source.path would be a second key."""
+    """A file's path is data.path for every source; a recordings source is given it by
+    data/datamodules/recording_files.py, so a value set at the older data.source.path is refused."""
     source = OmegaConf.select(cfg, "data.source", default=None)
-    if not isinstance(source, DictConfig) or "path" not in source:
-        return
-    value = source._get_node("path")._value()
-    if value != "${data.path}":
+    value = source.get("path") if isinstance(source, DictConfig) else None
+    if value is not None:
         raise InputError(f"data.source.path is not a setting: a file's path is data.path for every data source "
                          f"(data.path={value})")
 
@@ -424,9 +424,6 @@ def check_config(cfg: DictConfig, overrides=()) -> list[str]:
             raise InputError(f"{missing[0]} needs a value (add {missing[0]}=...)")
         config = OmegaConf.to_container(run_config, resolve=True)
     except InterpolationResolutionError as error:  # e.g. model=blend reads data.n_folds, which time-series data lacks
-        unset = re.search(r"Missing mandatory value: (\S+)", str(error))  # data.source.path: ${data.path}, unset
-        if unset:
-            raise InputError(f"{unset[1]} needs a value (add {unset[1]}=...)") from None
         raise InputError(f"{error.full_key}: {str(error).splitlines()[0]}") from None
     raw = OmegaConf.to_container(run_config, resolve=False)
     check_settings(config)

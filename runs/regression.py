@@ -10,6 +10,7 @@ import numpy as np
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
+from common.errors import InputError
 from common.progress import phase
 from models.deployable import RegressionPipeline, regression_pipeline
 from runs.report.analysis import edge_vs_centre, feature_ablation, identifiability_map, interval_report
@@ -17,6 +18,7 @@ from runs.report.metrics import regression_metrics
 from runs.report.regression_report import write_regression_report
 
 SHEET_TARGETS = {"x_mm", "y_mm", "depth_mm", "pressure_pa"}
+CLASSIFIER = "models.classic_classifiers.TableClassifier"   # for classification tables (runs/classification.py)
 
 
 @dataclass
@@ -104,6 +106,10 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
     analysis = cfg.get("analysis", {})
     (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     targets = datamodule.target_names
+    if cfg.model.get("_target_") == CLASSIFIER:
+        raise InputError(f"model.kind={cfg.model.kind} classifies, but {datamodule.table.source_name}'s target(s) "
+                         f"{', '.join(targets)} are quantities (regression): choose a regression model, or set "
+                         "data.task=classification for a class label")
     model = instantiate(cfg.model)
     groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split in ("grouped", "predefined") else None
 
@@ -111,10 +117,13 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
     model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
 
-    pred_test = model.predict(X_test)
+    def predict(X):  # (n, n_targets) even for one target, which scikit-learn's models return as a vector
+        return np.asarray(model.predict(X)).reshape(len(X), -1)
+
+    pred_test = predict(X_test)
     metrics = {
         "model": model.__class__.__name__,
-        "val": regression_metrics(y_val, model.predict(X_val), targets),
+        "val": regression_metrics(y_val, predict(X_val), targets),
         "test": regression_metrics(y_test, pred_test, targets),
         "fit_time_s": fit_time_s,
         **_model_size(model),

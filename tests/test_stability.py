@@ -63,7 +63,7 @@ def test_nan_loss_stops_at_once_with_the_epoch_and_writes_no_model(tmp_path):
     columns = [f"r_{k:02d}_ohm" for k in range(1, 13)] + ["x_mm", "y_mm", "depth_mm", "pressure_pa"]
     pd.DataFrame(rows, columns=columns).to_csv(tmp_path / "rig.csv", index=False)
     result = subprocess.run([sys.executable, str(ROOT / "train.py"), "data=table", f"data.path={tmp_path / 'rig.csv'}",
-                             "model=resmlp", f"hydra.run.dir={tmp_path / 'run'}"], capture_output=True, text=True, cwd=tmp_path)
+                             "data.target_columns=[x_mm,y_mm,depth_mm,pressure_pa]", "model=resmlp", f"hydra.run.dir={tmp_path / 'run'}"], capture_output=True, text=True, cwd=tmp_path)
     assert result.returncode == 2 and "'pressure_pa' has a missing or infinite value in line 2" in result.stderr
     assert result.stderr.strip().count("\n") == 0
     run_folder = tmp_path / "run"

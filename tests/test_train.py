@@ -103,7 +103,8 @@ def test_a_users_table_runs_like_a_scene(compose_config, tmp_path):
                           effects={"contact": {}, "percolation": {}, "adc": {}}).generate()
     path = tmp_path / "rig.parquet"
     table.frame.to_parquet(path)
-    cfg = compose_config(tiny("extra_trees") + ["data=table", f"data.path={path}", "data.split=grouped"])
+    cfg = compose_config(tiny("extra_trees") + ["data=table", f"data.path={path}", "data.split=grouped",
+                                                "data.target_columns=[x_mm,y_mm,depth_mm,pressure_pa]"])
     metrics = run(cfg, tmp_path / "run")
     assert metrics["data"]["split"] == "grouped" and metrics["data"]["source"]["path"] == str(path)
     assert (tmp_path / "run" / "metrics.json").exists()

@@ -13,6 +13,11 @@ is given are checked here to be finite in float32, naming the feature.
 Features are standardised with statistics from the training split only. Targets stay in
 physical units here: a net standardises its own targets inside `fit` and reports back in
 units, so every model sees and returns the same arrays.
+
+A classification table (data/sensor_table.py: its one target a class label) goes through the
+same steps; `task` says which it is, `y` holds class codes and `classes` their names, and every
+class of the validation, calibration and test rows must have training rows (a classifier cannot
+learn a class it never sees), checked before any fitting.
 """
 import logging
 
@@ -56,10 +61,14 @@ class RegressionDataModule:
                              "data=timeseries (experiment=materials10, textures13, combined18), for a contact "
                              "stream experiment=capacitive_tracking")
         self.table = table
+        self.task = "classification" if table.classes is not None else "regression"
         self.channel_names = list(table.channel_columns)
         self.target_names = list(table.target_columns)
         self.feature_names = feature_names(self.channel_names, self.features)
         self.y = table.targets
+        if self.task == "classification":
+            self.classes, self.label = list(table.classes), self.target_names[0]
+            self.y = self.y[:, 0].astype(np.int64)
 
         self.split, self.split_source = resolve_split(self.split, table.split is not None, self.declared_split,
                                                       DRAWN_SPLIT, table.source_name)
@@ -71,6 +80,8 @@ class RegressionDataModule:
             self._drawn_split(table)
         log.info("data split: %s; %d train, %d validation, %d calibration, %d test rows", self.split_source,
                  self.train_idx.size, self.val_idx.size, self.cal_idx.size, self.test_idx.size)
+        if self.task == "classification":
+            self._check_classes()
         with phase(f"features of {len(self.y):,} rows", enabled=len(self.y) >= LARGE_TABLE_ROWS):
             self.X, self.scaler = self.features_for(self.features)
         return self
@@ -95,6 +106,19 @@ class RegressionDataModule:
             rest, self.cal_idx = holdout(rest, table.groups, self.calibration_fraction / left, self.split, self.seed + 2)
             left -= self.calibration_fraction
         self.train_idx, self.val_idx = holdout(rest, table.groups, self.val_fraction / left, self.split, self.seed + 1)
+
+    def _check_classes(self) -> None:
+        source = self.table.source_name
+        if len(self.classes) < 2:
+            raise InputError(f"{source}: every row has {self.label} = {self.classes[0]!r}; classification needs at "
+                             "least two classes")
+        trained = set(self.y[self.train_idx].tolist())
+        for part, rows in (("validation", self.val_idx), ("calibration", self.cal_idx), ("test", self.test_idx)):
+            unseen = sorted(set(self.y[rows].tolist()) - trained)
+            if unseen:
+                raise InputError(f"{source}: class {self.classes[unseen[0]]!r} of {self.label} has {part} rows but no "
+                                 f"training rows ({int((self.y == unseen[0]).sum())} row(s) in all); a classifier "
+                                 "cannot learn a class it never sees: add rows of it or drop them")
 
     def features_for(self, groups):
         """Scaled features of every row for a choice of feature groups (used by the ablation):
@@ -139,15 +163,17 @@ class RegressionDataModule:
         return self._part(self.cal_idx if self.cal_idx.size else self.val_idx)
 
     def summary(self) -> dict:
-        return {"split": self.split, "split_note": SPLIT_NOTES.get(self.split, ""), "split_source": self.split_source,
+        task = {"task": self.task, "classes": self.classes} if self.task == "classification" else {"task": self.task}
+        return {**task, "split": self.split, "split_note": SPLIT_NOTES.get(self.split, ""), "split_source": self.split_source,
                 "n_train": int(self.train_idx.size), "n_val": int(self.val_idx.size),
                 "n_calibration": int(self.cal_idx.size), "n_test": int(self.test_idx.size), "n_features": len(self.feature_names),
                 "channels": self.channel_names, "targets": self.target_names,
                 "source": self.table.description}
 
 
-def from_table(path, channel_columns, target_columns, group_columns=None, split_column="split",
+def from_table(path, channel_columns=None, target_columns=None, group_columns=None, split_column="split", task="auto",
                **datamodule_options) -> RegressionDataModule:
-    """`data=table`: a user's CSV/Parquet recording served by the same datamodule as a scene."""
-    source = TableSource(path, channel_columns, target_columns, group_columns, split_column)
+    """`data=table`: a user's CSV/Parquet recording served by the same datamodule as a scene
+    (data/sensor_table.py TableSource: default channels, the task from the target's type)."""
+    source = TableSource(path, channel_columns, target_columns, group_columns, split_column, task)
     return RegressionDataModule(source, **datamodule_options)

@@ -73,27 +73,31 @@ def check_numeric_columns(frame: pd.DataFrame, columns: list[str], what: str, so
         check_model_values(numeric_column(frame[column], column, what, source), column, what, source)
 
 
-def check_columns_exist(frame: pd.DataFrame, columns: list[str], what: str, source: str) -> None:
+def check_columns_exist(frame: pd.DataFrame, columns: list[str], what: str, source: str,
+                        setting: str | None = None) -> None:
+    """Every named column is in the frame; else one line naming them, the columns found and, when
+    given, the setting that names them (`data.target_columns`)."""
     missing = [c for c in columns if c not in frame.columns]
     if missing:
+        fix = f"; set {setting}=[...]" if setting else ""
         raise InputError(f"{source}: missing {what} column(s) {', '.join(map(str, missing))}; "
-                         f"found {', '.join(map(str, frame.columns))}")
+                         f"found {', '.join(map(str, frame.columns))}{fix}")
 
 
-def numeric_column(raw: pd.Series, column: str, what: str, source: str) -> np.ndarray:
+def numeric_column(raw: pd.Series, column: str, what: str, source: str, hint: str = "") -> np.ndarray:
     """A column's cells as float64 (NaN where empty): text, booleans, dates, time spans and
-    complex numbers are one-line errors naming the cell."""
+    complex numbers are one-line errors naming the cell (and ending in `hint`)."""
     kind = getattr(raw.dtype, "kind", "O")
     values = pd.to_numeric(raw, errors="coerce")
     kind = kind if kind in REFUSED_KINDS else values.dtype.kind  # an object column of bools or complex numbers
     if kind in REFUSED_KINDS:
         raise InputError(f"{source}: {what} column '{column}' holds {REFUSED_KINDS[kind]}, not numbers in its "
-                         f"unit; refused rather than cast to float (write the numbers themselves)")
+                         f"unit; refused rather than cast to float (write the numbers themselves){hint}")
     bad = values.isna() & raw.notna()
     if bad.any():
         row = int(np.flatnonzero(bad.to_numpy())[0])
         raise InputError(f"{source}: {what} column '{column}' has a non-numeric value "
-                         f"{raw.iloc[row]!r} in {where(source, row)}")
+                         f"{raw.iloc[row]!r} in {where(source, row)}{hint}")
     return values.to_numpy(dtype=np.float64, na_value=np.nan)
 
 

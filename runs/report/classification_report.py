@@ -19,10 +19,11 @@ SPLIT_NAMES = {"val": "validation", "test": "test"}
 FIGURE_NAMES = {"val": "confusion", "test": "confusion_test"}  # confusion.png: validation
 
 
-def _split_frame(classes, split, recording, y_true, proba, levels) -> pd.DataFrame:
-    """One row per window: its recording, true and predicted class names and one probability
-    column per class (`p_<class>`), so a user can rank, threshold or calibrate without re-running."""
-    frame = pd.DataFrame({"split": split, "recording": recording, "true": classes[y_true],
+def _split_frame(classes, split, ids, y_true, proba, levels) -> pd.DataFrame:
+    """One row per window or table row: what it is (`ids`: its recording, or a table row's raw
+    readings), true and predicted class names and one probability column per class (`p_<class>`),
+    so a user can rank, threshold or calibrate without re-running."""
+    frame = pd.DataFrame({"split": split, **ids, "true": classes[y_true],
                           "predicted": classes[proba.argmax(axis=1)]})
     if levels is not None:
         frame["force_level_n"] = levels
@@ -48,8 +49,8 @@ def write_classification_report(result, output_dir, logger) -> None:
 
     classes = np.asarray(result.classes)
     frame = pd.concat([
-        _split_frame(classes, "val", result.val_window_recording, result.y_val, result.proba_val, result.val_levels),
-        _split_frame(classes, "test", result.test_window_recording, result.y_test, result.proba_test, result.test_levels),
+        _split_frame(classes, "val", result.val_ids, result.y_val, result.proba_val, result.val_levels),
+        _split_frame(classes, "test", result.test_ids, result.y_test, result.proba_test, result.test_levels),
     ], ignore_index=True)
     atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
     write_figures(output_dir, figures, logger)
