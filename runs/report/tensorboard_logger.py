@@ -2,8 +2,8 @@
 
 Each run writes its event files into `<run dir>/tensorboard/<name>`, the name saying what ran
 (`run_name`): `tensorboard --logdir outputs` lists `<date>/<time>_<pid>/tensorboard/rubber12·blend·seed0`,
-and a folder holding both outputs/ and multirun/ also lists every sweep job as
-`…/<job>/tensorboard/rubber12·extra_trees·seed1·trial3`. One entry per run: the hyper-parameters
+and `--logdir_spec outputs:outputs,multirun:multirun` also every sweep job, as
+`multirun/…/<job>/tensorboard/rubber12·extra_trees·seed1·trial3`. One entry per run: the hyper-parameters
 go into the run's own event file (the HPARAMS tab's session start and end), flattened to numbers
 and short strings. No experiment summary is written: TensorBoard would take the first run's as
 the whole comparison's, hiding the hyper-parameters of runs of another model; without one it
@@ -54,7 +54,7 @@ def _short(value) -> str:
 
 
 def flat_hparams(values: dict, prefix: str = "") -> dict:
-    """Nested settings -> {dotted key: number, bool or short string}, as TensorBoard's HPARAMS tab
+    """Nested settings -> {dotted key: number or short string}, as TensorBoard's HPARAMS tab
     takes them: dicts become dotted keys, a `_target_` its class name; None, a bool (which torch's
     summary would turn into 0 or 1), a list or a string its text, cut to TEXT_LIMIT characters;
     Hydra's other keys (_convert_, ...) are dropped."""
