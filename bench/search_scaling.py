@@ -1,0 +1,125 @@
+"""A search shared by several workers: trials per minute with 1, 2 and 4 `train.py -m` workers on
+one study (journal file and PostgreSQL), the storage's overhead per trial, and a loop of
+two-worker studies, some with a worker SIGKILLed mid-trial, counting lost and duplicated trials.
+
+    .venv/bin/python bench/search_scaling.py                          # ~20 min on 2 cores
+    .venv/bin/python bench/search_scaling.py --repeats 1 --kill-runs 4  # a quick look
+
+Every worker is a real `python train.py -m hparams_search=resmlp_optuna` process (threads=1, the
+default) with tiny trials (120 presses, 3 epochs), all on one study of `--trials` trials.
+Trials per minute: the study's complete trials over the span from the first trial's start to the
+last one's end (process start-up, ~5 s per worker, is outside it). Overhead: the time each
+worker's sweeper spends on the study between its jobs (lost-trial check, ask and TPE sampling,
+records, tell; `storage_ms_per_trial` in its optimization_results.yaml), averaged over workers. PostgreSQL: a throwaway server per study
+(runs/throwaway_postgres.py), so every study also meets the schema race of an empty database.
+Lost: a counted trial that did not complete; duplicated: a trial number, job folder or
+parameter set run twice (a re-queued trial aside).
+"""
+import argparse
+import os
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from contextlib import nullcontext
+from pathlib import Path
+
+import numpy as np
+import optuna
+import yaml
+from optuna.trial import TrialState
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from common.run_status import run_status  # noqa: E402
+from hydra_plugins.touchstone_optuna_sweeper.lost_trials import trial_job  # noqa: E402
+from hydra_plugins.touchstone_optuna_sweeper.study_budget import counted  # noqa: E402
+from runs.throwaway_postgres import missing, throwaway_postgres  # noqa: E402
+
+SEARCH = ["hparams_search=resmlp_optuna", "hydra.sweeper.n_startup_trials=4", "hydra.sweeper.study_name=bench",
+          "scene.n_samples=120", "scene.grid_nodes=21", "scene.progress=false", "trainer.max_epochs=3"]
+
+
+def study_run(folder: Path, storage: str, workers: int, n_trials: int, kill: bool) -> dict:
+    """One study run by `workers` train.py processes; its numbers."""
+    env = {**os.environ, "CI": "true", "OMP_NUM_THREADS": "1"}
+    processes = [subprocess.Popen([sys.executable, "train.py", "-m", *SEARCH, f"hydra.sweeper.n_trials={n_trials}",
+                                   f"hydra.sweeper.storage='{storage}'", f"hydra.sweep.dir={folder / f'w{i}'}"],
+                                  cwd=ROOT, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                 for i in range(workers)]
+    if kill:  # the first worker, as soon as one of its trials runs
+        while not any(run_status(job).state == "running" for job in folder.glob("w0/[0-9]*")):
+            time.sleep(0.05)
+        processes[0].send_signal(signal.SIGKILL)
+    codes = [p.wait() for p in processes]
+    if any(code != 0 for code in codes[1 if kill else 0:]):
+        raise SystemExit(f"a worker failed in {folder}: exit codes {codes}")
+    study = optuna.load_study(study_name="bench", storage=storage_object(storage))
+    trials = study.get_trials()
+    kept = counted(trials)
+    done = [t for t in kept if t.state == TrialState.COMPLETE]
+    span = (max(t.datetime_complete for t in done) - min(t.datetime_start for t in kept)).total_seconds()
+    retried = {n for t in trials for n in t.system_attrs.get("retry_history", ())}
+    fresh = [t for t in kept if "retry_history" not in t.system_attrs]  # a re-queued trial repeats on purpose
+    folders = [trial_job(t)["folder"] for t in kept if trial_job(t)]
+    reports = [yaml.safe_load(p.read_text()) for p in folder.glob("w*/optimization_results.yaml")]
+    return {"trials_per_min": 60 * len(done) / span,
+            "overhead_ms": float(np.mean([r["this_worker"]["storage_ms_per_trial"] for r in reports])),
+            "lost": n_trials - len(done) + sum(t.state in (TrialState.RUNNING, TrialState.WAITING) for t in trials),
+            "duplicated": (len(kept) - len({t.number for t in kept})) + (len(folders) - len(set(folders)))
+            + (len(fresh) - len({tuple(sorted(t.params.items())) for t in fresh})),
+            "requeued": len(retried), "workers_contributed": len({trial_job(t)["pid"] for t in done})}
+
+
+def storage_object(storage: str):
+    if storage.endswith(".log"):
+        from optuna.storages.journal import JournalFileBackend, JournalStorage
+        return JournalStorage(JournalFileBackend(storage))
+    return storage
+
+
+def one_study(engine: str, workers: int, n_trials: int, kill: bool = False) -> dict:
+    with tempfile.TemporaryDirectory(prefix="search-scaling-") as tmp:
+        folder = Path(tmp)
+        with (throwaway_postgres() if engine == "postgresql" else nullcontext(str(folder / "study.log"))) as storage:
+            return study_run(folder, storage, workers, n_trials, kill)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--trials", type=int, default=16, help="trials per study")
+    parser.add_argument("--workers", type=int, nargs="+", default=[1, 2, 4])
+    parser.add_argument("--kill-runs", type=int, default=20, help="two-worker studies, every other one with a kill")
+    args = parser.parse_args()
+    engines = ["journal"] + (["postgresql"] if missing() is None else [])
+    if missing():
+        print(f"PostgreSQL skipped: {missing()}")
+    print(f"load average before: {os.getloadavg()[0]:.1f}; {os.cpu_count()} cores; {args.trials} trials per study")
+    print("| storage | workers | trials/min | speed-up vs 1 worker | storage overhead (ms/trial) |")
+    print("|---|---|---|---|---|")
+    for engine in engines:
+        rates = {}
+        for workers in args.workers:
+            runs = [one_study(engine, workers, args.trials) for _ in range(args.repeats)]
+            rates[workers] = rate = np.array([r["trials_per_min"] for r in runs])
+            overhead = np.array([r["overhead_ms"] for r in runs])
+            speedup = f"{rate.mean() / rates[1].mean():.2f}×" if 1 in rates else "—"
+            print(f"| {engine} | {workers} | {rate.mean():.1f} ± {rate.std(ddof=1) if len(rate) > 1 else 0:.1f} "
+                  f"| {speedup} | {overhead.mean():.1f} ± {overhead.std(ddof=1) if len(overhead) > 1 else 0:.1f} |",
+                  flush=True)
+    print(f"load average after: {os.getloadavg()[0]:.1f}")
+    if args.kill_runs:
+        print("\n| storage | two-worker studies | with a worker killed | lost | duplicated | re-queued | both contributed |")
+        print("|---|---|---|---|---|---|---|")
+        for engine in engines:
+            runs = [one_study(engine, 2, 6, kill=i % 2 == 1) for i in range(args.kill_runs)]
+            print(f"| {engine} | {len(runs)} | {args.kill_runs // 2} | {sum(r['lost'] for r in runs)} "
+                  f"| {sum(r['duplicated'] for r in runs)} | {sum(r['requeued'] for r in runs)} "
+                  f"| {sum(r['workers_contributed'] == 2 for r in runs)} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
