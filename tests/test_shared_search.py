@@ -21,6 +21,8 @@ from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, op
 from hydra_plugins.touchstone_optuna_sweeper.trial_seeded_sampler import TrialSeededTPESampler
 from runs.throwaway_postgres import missing, throwaway_postgres
 
+import slurm_support  # tests/slurm_support.py
+
 ROOT = Path(__file__).resolve().parents[1]
 SPACE = {"x": optuna.distributions.FloatDistribution(0.0, 1.0), "k": optuna.distributions.IntDistribution(1, 9)}
 SEARCH = ["hparams_search=resmlp_optuna", "hydra.sweeper.n_startup_trials=2", "scene.n_samples=120",
@@ -103,13 +105,14 @@ def test_a_trial_whose_worker_is_gone_is_failed_and_requeued_once(tmp_path):
     assert [t.number for t in counted(study.get_trials())] == [1, 2]  # the budget counts it once
 
 
-def workers(tmp_path: Path, storage: str, n_trials: int, count: int = 2, name: str = "shared") -> list:
-    env = {**os.environ, "CI": "true", "OMP_NUM_THREADS": "1"}
+def workers(tmp_path: Path, storage: str, n_trials: int, *overrides: str, env: dict | None = None) -> list:
+    """Two `train.py -m` search workers on study `shared`, their output in worker<i>.log."""
+    env = {**(env or os.environ), "CI": "true", "OMP_NUM_THREADS": "1"}
     started = []
-    for index in range(count):
+    for index in range(2):
         out = open(tmp_path / f"worker{index}.log", "w")
-        command = [sys.executable, "train.py", "-m", *SEARCH, f"hydra.sweeper.n_trials={n_trials}",
-                   f"hydra.sweeper.study_name={name}", f"hydra.sweeper.storage='{storage}'",  # quoted: a URL holds '='
+        command = [sys.executable, "train.py", "-m", *SEARCH, *overrides, f"hydra.sweeper.n_trials={n_trials}",
+                   "hydra.sweeper.study_name=shared", f"hydra.sweeper.storage='{storage}'",  # quoted: a URL holds '='
                    f"hydra.sweep.dir={tmp_path / f'sweep{index}'}"]
         started.append(subprocess.Popen(command, cwd=ROOT, stdout=out, stderr=subprocess.STDOUT, env=env))
     return started
@@ -181,3 +184,17 @@ def test_a_worker_killed_mid_trial_leaves_its_trial_to_the_survivor(tmp_path):
     report = yaml.safe_load((tmp_path / "sweep1" / "optimization_results.yaml").read_text())
     assert not report["partial"] and report["complete"] == 6
     assert [t["requeued_as"] for t in report["trials"] if t["number"] == lost[0].number] == [requeued[0].number]
+
+
+@pytest.mark.slow
+@pytest.mark.skipif(slurm_support.missing() is not None, reason=slurm_support.missing() or "")
+def test_two_workers_send_their_trials_to_slurm_through_submitit(tmp_path):
+    """Each worker's batch of two trials is one SLURM job array (hydra/launcher=slurm) on a one-node cluster."""
+    log = tmp_path / "study.log"
+    with slurm_support.throwaway_slurm() as env:
+        finished(tmp_path, workers(tmp_path, str(log), 4, "hydra/launcher=slurm", "hydra.launcher.partition=debug",
+                                   "hydra.launcher.cpus_per_task=1", "hydra.launcher.mem_gb=null",
+                                   "hydra.launcher.timeout_min=10", "hydra.sweeper.n_jobs=2", env=env))
+    study = optuna.load_study(study_name="shared", storage=JournalStorage(JournalFileBackend(str(log))))
+    assert len(assert_one_study(study, 4, tmp_path)) == 2
+    assert list(tmp_path.glob("sweep*/.submitit/*/*_submission.sh"))  # sbatch scripts: the jobs went through SLURM
