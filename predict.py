@@ -100,7 +100,9 @@ def model_inputs(predictor: OnnxPredictor) -> str:
         lines.append("  output: " + ", ".join(_with_unit(t) for t in predictor.targets)
                      + (", each with _lower95 and _upper95" if bounds else ""))
     else:
-        lines.append(f"  classes ({len(predictor.classes)}): {', '.join(predictor.classes)}")
+        label = predictor.metadata.get("label")  # the target column a table classifier was trained on
+        lines.append(f"  classes{f' of {label!r}' if label else ''} ({len(predictor.classes)}): "
+                     f"{', '.join(predictor.classes)}")
         lines.append("  output: " + ("recording (when the input names them), start_step, " if predictor.reads_windows
                                      else "") + "predicted, " + ", ".join(f"p_{c}" for c in predictor.classes))
     return "\n".join(lines)
@@ -175,7 +177,9 @@ def table_input(predictor: OnnxPredictor, frame, source: str, args: dict) -> tup
             check_columns_exist(frame, [column], key.replace("_column", ""), source)
     id_column = columns["recording_column"] if columns["recording_column"] in frame.columns else None
     time_column = columns["time_column"] if columns["time_column"] in frame.columns else None
-    check_numeric_columns(frame, predictor.channels + ([time_column] if time_column else []), "channel/time", source)
+    check_numeric_columns(frame, predictor.channels, "channel", source)
+    if time_column:
+        check_numeric_columns(frame, [time_column], "time", source)
     if id_column:
         groups = table_recordings(frame, id_column, time_column, source)
     else:

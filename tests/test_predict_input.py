@@ -425,7 +425,8 @@ def test_a_long_table_names_its_columns_on_the_command_line(models, tmp_path, ca
     ("empty_id", [], ["rig.csv: recording column 'recording' is empty in line "]),
     ("repeated_time", [], ["rig.csv: time column 'time_s' gives no positive time step"]),
     ("short", [], ["rig.csv: recording trial_a, 3 steps is shorter than the model's window of 4 steps"]),
-    ("huge", [], ["rig.csv: channel/time column 'b_ohm' has 1e+308 in line "]),
+    ("huge", [], ["rig.csv: channel column 'b_ohm' has 1e+308 in line "]),
+    ("text_time", [], ["rig.csv: time column 'time_s' has a non-numeric value 'noon' in line "]),
 ])
 def test_a_bad_long_table_is_one_line(models, tmp_path, capsys, change, args, fragments):
     X = signals(2, 2 * WINDOW_STEPS)
@@ -436,6 +437,9 @@ def test_a_bad_long_table_is_one_line(models, tmp_path, capsys, change, args, fr
         frame["time_s"] = 0.0
     if change == "short":
         frame = frame[(frame["recording"] == "trial_b") | (frame["time_s"] < 3 / SAMPLE_RATE_HZ)]
+    if change == "text_time":
+        frame["time_s"] = frame["time_s"].astype(object)
+        frame.iloc[2, frame.columns.get_loc("time_s")] = "noon"
     if change == "huge":
         frame.iloc[5, frame.columns.get_loc("b_ohm")] = 1e308
     frame.to_csv(tmp_path / "rig.csv", index=False)
