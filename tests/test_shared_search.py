@@ -17,7 +17,7 @@ from common.errors import InputError
 from common.run_status import run_status, this_process
 from hydra_plugins.touchstone_optuna_sweeper.lost_trials import JOB, fail_lost_trials, record_job, requeuing, trial_job
 from hydra_plugins.touchstone_optuna_sweeper.study_budget import budget_left, counted, is_surplus, mark_surplus
-from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, storage_location
+from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, shown, storage_location
 from hydra_plugins.touchstone_optuna_sweeper.trial_seeded_sampler import TrialSeededTPESampler
 from runs.throwaway_postgres import missing, throwaway_postgres
 
@@ -47,6 +47,7 @@ def test_storage_setting_names_a_journal_file_or_a_url(tmp_path, monkeypatch):
     assert storage_location("journal:///nfs/s.log", "lr", sweep) == "journal:///nfs/s.log"
     url = "postgresql+psycopg2://u@db/optuna"
     assert storage_location(url, "lr", sweep) == url
+    assert shown("postgresql+psycopg2://u:secret@db/optuna") == "postgresql+psycopg2://u:***@db/optuna"
     with pytest.raises(InputError, match="neither a journal file"):
         storage_location("studies/s.db", "lr", sweep)
     with pytest.raises(InputError, match="study_name"):

@@ -43,7 +43,7 @@ from common.errors import InputError
 from hydra_plugins.touchstone_optuna_sweeper.lost_trials import Heartbeat, fail_lost_trials, record_job, requeuing
 from hydra_plugins.touchstone_optuna_sweeper.study_budget import budget_left, is_surplus, mark_surplus, progress
 from hydra_plugins.touchstone_optuna_sweeper.study_report import RESULTS, study_results, write_study_report
-from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, storage_location
+from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, shown, storage_location
 from hydra_plugins.touchstone_optuna_sweeper.trial_seeded_sampler import TrialSeededTPESampler
 
 log = logging.getLogger(__name__)
@@ -105,7 +105,7 @@ class OptunaTPESweeper(Sweeper):
         sweep_dir.mkdir(parents=True, exist_ok=True)
         OmegaConf.save(self.config, sweep_dir / "multirun.yaml")
         log.info("Optuna TPE search: study %r (%s), %d trials in the study over %s; this worker's jobs in %s",
-                 study.study_name, location, self.n_trials, ", ".join(space), sweep_dir)
+                 study.study_name, shown(location), self.n_trials, ", ".join(space), sweep_dir)
         # storage_s: time spent on the study between jobs (lost-trial check, ask and sampling, records,
         # tell), the storage's overhead per trial in optimization_results.yaml
         returns, ran, storage_s = [], 0, 0.0
@@ -193,7 +193,7 @@ class OptunaTPESweeper(Sweeper):
 
     def _report(self, study: optuna.Study, fixed: list[str], location: str, sweep_dir: Path, ran: int,
                 storage_s: float) -> None:
-        results = study_results(study, self.n_trials, location)
+        results = study_results(study, self.n_trials, shown(location))
         results["this_worker"] = {"sweep_dir": str(sweep_dir.absolute()), "trials_run": ran,
                                   "storage_ms_per_trial": round(1e3 * storage_s / max(ran, 1), 2)}
         if "best_trial" in results:

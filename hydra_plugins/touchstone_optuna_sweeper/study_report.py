@@ -72,7 +72,7 @@ def write_study_report(sweep_dir: Path, results: dict, parallel: bool) -> None:
 
 
 def main(argv: list[str]) -> None:
-    from hydra_plugins.touchstone_optuna_sweeper.study_storage import open_storage, storage_location
+    from hydra_plugins.touchstone_optuna_sweeper.study_storage import open_storage, shown, storage_location
 
     if len(argv) != 3:
         sys.exit("usage: python -m hydra_plugins.touchstone_optuna_sweeper.study_report <storage> <study name> <folder>")
@@ -81,7 +81,7 @@ def main(argv: list[str]) -> None:
     n_trials = study.user_attrs.get("definition", {}).get("n_trials", len(study.trials))
     folder = Path(argv[2])
     folder.mkdir(parents=True, exist_ok=True)
-    results = study_results(study, n_trials, location)
+    results = study_results(study, n_trials, shown(location))
     write_study_report(folder, results, parallel=results["workers"] > 1)
     print(f"{folder / RESULTS}: {results['complete']} of {results['n_trials']} trials complete"
           + (f", {results['running']} running, {results['waiting']} waiting (partial)" if results["partial"] else ""))

@@ -48,6 +48,14 @@ def storage_location(storage: str | None, study_name: str | None, sweep_dir: Pat
     return storage
 
 
+def shown(location: str) -> str:
+    """The location as logs and reports show it: a URL's password masked."""
+    if location.startswith(JOURNAL_SCHEME):
+        return location
+    from sqlalchemy.engine import make_url
+    return make_url(location).render_as_string(hide_password=True)
+
+
 def open_storage(location: str, heartbeat_interval: int, retry_lost_trial) -> optuna.storages.BaseStorage:
     """The storage at `location` (storage_location), tables created once (see the module's note)."""
     if location.startswith(JOURNAL_SCHEME):
@@ -58,7 +66,7 @@ def open_storage(location: str, heartbeat_interval: int, retry_lost_trial) -> op
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         return retrying(lambda: optuna.storages.RDBStorage(
             location, heartbeat_interval=heartbeat_interval, grace_period=2 * heartbeat_interval,
-            heartbeat_stale_trial_callback=retry_lost_trial), f"hydra.sweeper.storage={location}")
+            heartbeat_stale_trial_callback=retry_lost_trial), f"hydra.sweeper.storage={shown(location)}")
 
 
 def retrying(open_once, what: str):
