@@ -14,9 +14,9 @@ outside what the model can compute) is refused before anything is returned.
 """
 import json
 import math
+from collections.abc import Callable, Hashable
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Hashable
 
 import numpy as np
 import onnxruntime as ort
@@ -25,6 +25,7 @@ import pandas as pd
 from common.errors import InputError
 from common.threads import configured_threads
 from data.readers.table_reader import check_numeric_columns, where
+from data.units import clip_to_range
 
 KINDS = ("regression", "classification")
 # The graph's one input (metadata 'input'; by kind when a file has none) and its first output per
@@ -224,9 +225,9 @@ class OnnxPredictor:
         result = pd.DataFrame(prediction, columns=self.targets)
         if "interval_half_width" in out:
             half = out["interval_half_width"].astype(np.float64)
-            for k, target in enumerate(self.targets):
-                result[f"{target}_lower95"] = prediction[:, k] - half[:, k]
-                result[f"{target}_upper95"] = prediction[:, k] + half[:, k]
+            for k, target in enumerate(self.targets):  # bounds within the target's physical range (data/units.py)
+                result[f"{target}_lower95"] = clip_to_range(prediction[:, k] - half[:, k], target)
+                result[f"{target}_upper95"] = clip_to_range(prediction[:, k] + half[:, k], target)
         return result
 
     # -- windows of recordings: a time-series classifier --------------------------------------
