@@ -1,5 +1,6 @@
 """A search many workers share: one study, its budget, its lost trials and its report, on the
 real engines (Optuna's journal file, a throwaway PostgreSQL server, train.py processes)."""
+import json
 import os
 import signal
 import subprocess
@@ -14,9 +15,10 @@ from optuna.storages.journal import JournalFileBackend, JournalStorage
 from optuna.trial import TrialState
 
 from common.errors import InputError
-from common.run_status import run_status, this_process
+from common.run_status import mark_finished, mark_running, run_status, this_process
 from hydra_plugins.touchstone_optuna_sweeper.lost_trials import JOB, fail_lost_trials, record_job, requeuing, trial_job
 from hydra_plugins.touchstone_optuna_sweeper.study_budget import budget_left, counted, is_surplus, mark_surplus
+from hydra_plugins.touchstone_optuna_sweeper.study_report import study_results, write_study_report
 from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, shown, storage_location
 from hydra_plugins.touchstone_optuna_sweeper.trial_seeded_sampler import TrialSeededTPESampler
 from runs.throwaway_postgres import missing, throwaway_postgres
@@ -104,6 +106,32 @@ def test_a_trial_whose_worker_is_gone_is_failed_and_requeued_once(tmp_path):
     assert requeued.number == 2 and requeued.params == lost.params
     assert trial_job(study.get_trials()[2]) is None  # the predecessor's record is not this trial's
     assert [t.number for t in counted(study.get_trials())] == [1, 2]  # the budget counts it once
+
+
+def finished_job(folder: Path, overrides: list[str], val_r2: float) -> None:
+    """A job folder as a finished regression run leaves it, no cost measured."""
+    (folder / ".hydra").mkdir(parents=True)
+    (folder / ".hydra" / "overrides.yaml").write_text(yaml.safe_dump(overrides))
+    (folder / "metrics.json").write_text(json.dumps({"val": {"average": {"r2": val_r2}}}))
+    mark_finished(folder, mark_running(folder, "0" * 16))
+
+
+def test_a_report_written_while_trials_run_elsewhere_says_partial(tmp_path):
+    study = journal_study(tmp_path / "s.log", n_trials=3)
+    done, running = study.ask(SPACE), study.ask(SPACE)
+    for trial in (done, running):
+        record_job(trial, str(tmp_path / "sweep" / str(trial.number)))
+    finished_job(tmp_path / "sweep" / "0", [f"x={done.params['x']}"], 0.5)
+    study.tell(done, 0.5)
+    results = study_results(study, 3, "journal:///s.log")
+    assert results["partial"] and (results["complete"], results["running"]) == (1, 1)
+    assert results["best_job_folder"] == str(tmp_path / "sweep" / "0")
+    write_study_report(tmp_path / "report", results, parallel=False)
+    written = yaml.safe_load((tmp_path / "report" / "optimization_results.yaml").read_text())
+    assert written["partial"] and "1 complete, 0 failed, 1 running" in written["note"]
+    assert (tmp_path / "report" / "pareto.md").read_text().splitlines()[2].startswith("> Partial report")
+    assert not (tmp_path / "report" / "pareto.png").exists()  # no cost measured: no figure of empty panels
+    assert [p.name for p in (tmp_path / "report" / "tensorboard").iterdir()] == ["trial_0000"]
 
 
 def workers(tmp_path: Path, storage: str, n_trials: int, *overrides: str, env: dict | None = None) -> list:
