@@ -5,7 +5,9 @@ interval assumes Gaussian, well-estimated errors; split-conformal calibration (V
 2005; Lei et al., JASA 113, 2018) makes it distribution-free: on held-out calibration data take
 the normalised scores |y - mean| / sigma and their ceil((n + 1)(1 - alpha)) / n empirical
 quantile q, per target; then mean +/- q sigma covers a new point with probability >= 1 - alpha
-(exchangeable data). Too few calibration rows for the quantile is a clear error.
+(exchangeable data). With fewer calibration rows than the quantile needs (19 at 95 %),
+`IntervalMixin.calibrate` keeps the raw Gaussian scale and says so (`calibration_note_`);
+`conformal_quantile` itself refuses them.
 
 When rows come in recordings that share effects (a drift walk, one unloaded frame), rows are
 not exchangeable but whole recordings are: pool the scores of several recordings for q, and
@@ -14,10 +16,16 @@ check the coverage a new recording gets by leaving each recording out in turn
 group level) - the spread over recordings is what one test recording's coverage varies by.
 """
 import numpy as np
+from scipy.stats import norm
 
 from common.errors import InputError
 
 Z_95 = 1.959963984540054
+
+
+def calibration_rows_needed(alpha: float = 0.05) -> int:
+    """The fewest calibration rows whose conformal quantile at 1 - alpha is one of them."""
+    return int(np.ceil((1 - alpha) / alpha - 1e-9))
 
 
 def conformal_quantile(scores: np.ndarray, alpha: float = 0.05) -> np.ndarray:
@@ -27,7 +35,7 @@ def conformal_quantile(scores: np.ndarray, alpha: float = 0.05) -> np.ndarray:
     rank = int(np.ceil((n + 1) * (1.0 - alpha)))
     if rank > n:
         raise InputError(f"conformal calibration at {100 * (1 - alpha):.0f} % needs at least "
-                         f"{int(np.ceil((1 - alpha) / alpha))} calibration rows, got {n}")
+                         f"{calibration_rows_needed(alpha)} calibration rows, got {n}")
     return np.sort(scores, axis=0)[rank - 1]
 
 
@@ -58,9 +66,19 @@ class IntervalMixin:
     """Adds calibrate / predict_interval to an estimator that implements predict_std."""
 
     def calibrate(self, X, y, alpha: float = 0.05):
+        """The conformal scale per target from calibration rows (X, y); with too few of them, the
+        raw scale z_{1 - alpha/2} (1.96 at 95 %) and `calibration_note_` saying why."""
         mean, sigma = self.predict_std(X)
-        self.conformal_scale_ = conformal_quantile(normalised_scores(y, mean, sigma), alpha)
         self.alpha_ = alpha
+        needed = calibration_rows_needed(alpha)
+        if len(mean) < needed:
+            self.conformal_scale_ = np.full(mean.shape[1], norm.ppf(1 - alpha / 2))
+            self.calibration_note_ = (f"too few calibration rows for a conformal {100 * (1 - alpha):.0f} % interval "
+                                      f"({len(mean)} < {needed}): intervals are the uncalibrated mean +/- "
+                                      f"{self.conformal_scale_[0]:.2f} sigma")
+            return self
+        self.conformal_scale_ = conformal_quantile(normalised_scores(y, mean, sigma), alpha)
+        self.calibration_note_ = None
         return self
 
     def predict_interval(self, X, calibrated: bool = True):

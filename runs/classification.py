@@ -9,8 +9,8 @@ and per-epoch curves. Choose on validation, report on test: the model sees valid
 for its per-epoch curves and sweeps rank runs by validation accuracy; test windows are only
 predicted once, after fitting, and scored beside validation.
 
-A table's classifier has its probabilities calibrated on the calibration rows (held out of the
-training data, grouped as the split is; validation rows when data.calibration_fraction=0), by
+A table's classifier has its probabilities calibrated on the held-out rows no model is fitted on
+(data/datamodules/regression.py calibration_idx: the calibration and validation rows), by
 temperature scaling; with fewer than MIN_CALIBRATION_ROWS it stays uncalibrated, and the log and
 metrics.json say so. Its model: a TableClassifier config (model=logistic_regression, model=mlp)
 as it is; a tree config (model=extra_trees, random_forest, decision_tree) as the classifier of
@@ -84,20 +84,19 @@ def table_classifier(cfg) -> TableClassifier:
 
 def _calibrate(model, datamodule) -> dict:
     """Temperature-scale the model's probabilities on the calibration rows -> what metrics.json says of it."""
-    rows = datamodule.cal_idx if datamodule.cal_idx.size else datamodule.val_idx
-    part = "calibration" if datamodule.cal_idx.size else "validation"
+    rows = datamodule.calibration_idx
     if rows.size < MIN_CALIBRATION_ROWS:
-        note = (f"too few {part} rows to calibrate the class probabilities ({rows.size} < {MIN_CALIBRATION_ROWS}); "
-                "they are the classifier's own")
+        note = (f"too few calibration rows to calibrate the class probabilities ({rows.size} < {MIN_CALIBRATION_ROWS}, "
+                "calibration and validation rows together); they are the classifier's own")
         log.warning(note)
         return {"method": None, "rows": int(rows.size), "note": note}
     X_test, y_test = datamodule.test
     before = classification_metrics(y_test, model.predict_proba(X_test), datamodule.classes)["loss"]
-    model.calibrate(datamodule.X[rows], datamodule.y[rows])
+    model.calibrate(*datamodule.calibration)
     after = classification_metrics(y_test, model.predict_proba(X_test), datamodule.classes)["loss"]
-    log.info("class probabilities calibrated on %d %s rows (temperature scaling, beta %.3f): test log loss %.4f -> %.4f",
-             rows.size, part, model.temperature_beta_, before, after)
-    return {"method": "temperature", "rows": int(rows.size), "split": part, "temperature_beta": model.temperature_beta_,
+    log.info("class probabilities calibrated on %d held-out rows (temperature scaling, beta %.3f): test log loss "
+             "%.4f -> %.4f", rows.size, model.temperature_beta_, before, after)
+    return {"method": "temperature", "rows": int(rows.size), "temperature_beta": model.temperature_beta_,
             "test_loss_uncalibrated": before, "test_loss": after}
 
 

@@ -2,6 +2,7 @@
 report side (runs/report/regression_report.py) writes it once: figures, TensorBoard, predictions
 and the pipeline (runs/run.py then exports it and writes metrics.json).
 """
+import logging
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -12,11 +13,13 @@ from omegaconf import DictConfig, OmegaConf
 
 from common.errors import InputError
 from common.progress import phase
+from data.units import clip_to_range
 from models.deployable import RegressionPipeline, regression_pipeline
 from runs.report.analysis import edge_vs_centre, feature_ablation, identifiability_map, interval_report
 from runs.report.metrics import regression_metrics
 from runs.report.regression_report import write_regression_report
 
+log = logging.getLogger(__name__)
 SHEET_TARGETS = {"x_mm", "y_mm", "depth_mm", "pressure_pa"}
 CLASSIFIER = "models.classic_classifiers.TableClassifier"   # for classification tables (runs/classification.py)
 
@@ -34,6 +37,13 @@ class RegressionResult:
     importances: tuple | None = None            # (candidate name, values) of a tree model
     correlation: tuple | None = None            # (matrix, labels): targets and top features
     hparams: dict = field(default_factory=dict)
+
+
+def physical_bounds(lower, upper, targets) -> tuple[np.ndarray, np.ndarray]:
+    """Interval bounds clipped to each target's physical range (data/units.py: a pressure, a
+    force's magnitude or a depth is >= 0), as predict.py clips them."""
+    clip = lambda bound: np.column_stack([clip_to_range(bound[:, k], t) for k, t in enumerate(targets)])  # noqa: E731
+    return clip(lower), clip(upper)
 
 
 def _model_size(model) -> dict:
@@ -140,9 +150,15 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
     if hasattr(model, "weights_"):
         metrics["selection"] = _selection_report(model, targets)
     if hasattr(model, "predict_std"):
-        model.calibrate(*datamodule.calibration)
+        X_cal, y_cal = datamodule.calibration
+        model.calibrate(X_cal, y_cal)
         metrics["uncertainty"], mean, sigma = interval_report(model, X_test, y_test, targets)
-        result.interval = model.predict_interval(X_test, calibrated=True)
+        metrics["uncertainty"]["calibration_rows"] = len(y_cal)
+        if model.calibration_note_:
+            log.warning(model.calibration_note_)
+            metrics["uncertainty"]["calibration_note"] = model.calibration_note_
+        mean, lower, upper = model.predict_interval(X_test, calibrated=True)
+        result.interval = (mean, *physical_bounds(lower, upper, targets))
         if SHEET_TARGETS <= set(targets):
             xy = y_test[:, [targets.index("x_mm"), targets.index("y_mm")]]
             ident = identifiability_map(xy, y_test[:, targets.index("depth_mm")], sigma, np.abs(y_test - mean),

@@ -40,8 +40,8 @@ def test_calibration_split_is_disjoint_from_train_validation_and_test(compose_co
     if split == "grouped":
         for (a, ia), (b, ib) in combinations(parts.items(), 2):
             assert not set(groups[ia].tolist()) & set(groups[ib].tolist()), (a, b)
-    # what the blend calibrates on is that split, not the validation rows
-    np.testing.assert_array_equal(dm.calibration[1], dm.y[dm.cal_idx])
+    # what the blend calibrates on: the calibration split and the validation rows, both held out of fitting
+    np.testing.assert_array_equal(dm.calibration[1], dm.y[np.r_[dm.cal_idx, dm.val_idx]])
 
 
 # -- the blend's weighting switches ----------------------------------------------------------
