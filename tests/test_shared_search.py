@@ -16,7 +16,14 @@ from optuna.trial import TrialState
 
 from common.errors import InputError
 from common.run_status import mark_finished, mark_running, run_status, this_process
-from hydra_plugins.touchstone_optuna_sweeper.lost_trials import JOB, fail_lost_trials, record_job, requeuing, trial_job
+from hydra_plugins.touchstone_optuna_sweeper.lost_trials import (
+    JOB,
+    fail_lost_trials,
+    give_back,
+    record_job,
+    requeuing,
+    trial_job,
+)
 from hydra_plugins.touchstone_optuna_sweeper.study_budget import budget_left, counted, is_surplus, mark_surplus
 from hydra_plugins.touchstone_optuna_sweeper.study_report import study_results, write_study_report
 from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, shown, storage_location
@@ -134,6 +141,15 @@ def test_a_report_written_while_trials_run_elsewhere_says_partial(tmp_path):
     assert [p.name for p in (tmp_path / "report" / "tensorboard").iterdir()] == ["trial_0000"]
 
 
+def test_a_stopped_worker_gives_its_trials_back(tmp_path):
+    study = journal_study(tmp_path / "s.log")
+    mine = study.ask(SPACE)
+    give_back(study, [mine], retry)
+    trials = study.get_trials()
+    assert trials[0].state == TrialState.FAIL
+    assert trials[1].state == TrialState.WAITING and trials[1].params == mine.params
+
+
 def workers(tmp_path: Path, storage: str, n_trials: int, *overrides: str, env: dict | None = None) -> list:
     """Two `train.py -m` search workers on study `shared`, their output in worker<i>.log."""
     env = {**(env or os.environ), "CI": "true", "OMP_NUM_THREADS": "1"}
@@ -191,14 +207,17 @@ def test_two_workers_share_a_study_on_postgresql(tmp_path):
 
 
 @pytest.mark.slow
-def test_a_worker_killed_mid_trial_leaves_its_trial_to_the_survivor(tmp_path):
+@pytest.mark.parametrize("kill, job_state", [(signal.SIGKILL, "interrupted"), (signal.SIGTERM, "failed")])
+def test_a_worker_killed_mid_trial_leaves_its_trial_to_the_survivor(tmp_path, kill, job_state):
+    """SIGKILL: the survivor finds the trial lost (its worker's pid is gone); SIGTERM (a scheduler's
+    time limit): the stopped worker gives its trial back itself. Either way it runs again."""
     log = tmp_path / "study.log"
     victim, survivor = workers(tmp_path, str(log), n_trials=6)
     deadline = time.monotonic() + 300
     while not any(run_status(job).state == "running" for job in tmp_path.glob("sweep0/[0-9]*")):  # mid-trial
         assert time.monotonic() < deadline and victim.poll() is None
         time.sleep(0.05)
-    victim.send_signal(signal.SIGKILL)
+    victim.send_signal(kill)
     victim.wait()
     finished(tmp_path, [survivor])
     study = optuna.load_study(study_name="shared", storage=JournalStorage(JournalFileBackend(str(log))))
@@ -207,7 +226,9 @@ def test_a_worker_killed_mid_trial_leaves_its_trial_to_the_survivor(tmp_path):
     assert len(lost) == 1 and not [t for t in trials if t.state == TrialState.RUNNING]
     requeued = [t for t in trials if t.system_attrs.get("retry_history") == [lost[0].number]]
     assert len(requeued) == 1 and requeued[0].params == lost[0].params and requeued[0].state == TrialState.COMPLETE
-    assert run_status(trial_job(lost[0])["folder"]).state == "interrupted"
+    assert run_status(trial_job(lost[0])["folder"]).state == job_state
+    found_lost = f"trial {lost[0].number}: its worker is gone" in (tmp_path / "worker1.log").read_text()
+    assert found_lost == (kill == signal.SIGKILL)  # SIGTERM: given back before the survivor could find it
     kept = counted(trials)
     assert len(kept) == 6 and all(t.state == TrialState.COMPLETE for t in kept)
     report = yaml.safe_load((tmp_path / "sweep1" / "optimization_results.yaml").read_text())

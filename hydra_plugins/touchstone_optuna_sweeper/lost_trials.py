@@ -47,25 +47,35 @@ def requeuing(max_retry: int):
         return optuna.storages.RetryHeartbeatStaleTrialCallback(max_retry=max_retry)
 
 
+def fail_and_requeue(study: optuna.Study, trial_number: int, retry) -> bool:
+    """Fail a running trial and re-queue it through `retry`; False when it had finished already.
+    Two workers may fail one trial together: the storage lets only one of them do it."""
+    try:
+        study.tell(trial_number, state=TrialState.FAIL)
+    except (RuntimeError, ValueError):  # UpdateFinishedTrialError is a RuntimeError
+        return False
+    retry(study, next(t for t in study.get_trials(deepcopy=False) if t.number == trial_number))
+    return True
+
+
 def fail_lost_trials(study: optuna.Study, retry) -> list[int]:
-    """Fail (and re-queue through `retry`) the trials lost by gone workers; returns their numbers.
-    Two workers may find one trial together: the storage lets only one of them fail it."""
-    failed = []
-    for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,)):
-        if not lost_by_a_gone_worker(trial):
-            continue
-        try:
-            study.tell(trial.number, state=TrialState.FAIL)
-        except (RuntimeError, ValueError):  # UpdateFinishedTrialError is a RuntimeError
-            continue  # another worker failed it first (the storage's word), or it has just finished
-        retry(study, next(t for t in study.get_trials(deepcopy=False) if t.number == trial.number))
-        failed.append(trial.number)
+    """Fail and re-queue the trials lost by gone workers; returns their numbers."""
+    failed = [trial.number for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
+              if lost_by_a_gone_worker(trial) and fail_and_requeue(study, trial.number, retry)]
     with warnings.catch_warnings():  # fail_stale_trials is "experimental"; a no-op without a heartbeat
         warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
         before = {t.number for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,))}
         optuna.storages.fail_stale_trials(study)
         failed += sorted({t.number for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,))} - before)
     return failed
+
+
+def give_back(study: optuna.Study, trials: list[optuna.Trial], retry) -> None:
+    """This worker is being stopped (Ctrl-C, SIGTERM from a scheduler's time limit or pre-emption)
+    mid-batch: its trials are failed and re-queued now, for the other workers, rather than found
+    lost later."""
+    for trial in trials:
+        fail_and_requeue(study, trial.number, retry)
 
 
 class Heartbeat:

@@ -40,7 +40,7 @@ from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, OmegaConf
 
 from common.errors import InputError
-from hydra_plugins.touchstone_optuna_sweeper.lost_trials import Heartbeat, fail_lost_trials, record_job, requeuing
+from hydra_plugins.touchstone_optuna_sweeper.lost_trials import Heartbeat, fail_lost_trials, give_back, record_job, requeuing
 from hydra_plugins.touchstone_optuna_sweeper.study_budget import budget_left, is_surplus, mark_surplus, progress
 from hydra_plugins.touchstone_optuna_sweeper.study_report import RESULTS, study_results, write_study_report
 from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, shown, storage_location
@@ -122,8 +122,12 @@ class OptunaTPESweeper(Sweeper):
                      for trial in trials]
             if not returns:  # every batch overrides the same keys: composing the first one proves them all
                 self.validate_batch_is_legal(batch)
-            with Heartbeat(storage, trials, self.heartbeat_interval):
-                results = self.launcher.launch(batch, initial_job_idx=trials[0].number)
+            try:
+                with Heartbeat(storage, trials, self.heartbeat_interval):
+                    results = self.launcher.launch(batch, initial_job_idx=trials[0].number)
+            except BaseException:
+                give_back(study, trials, self.retry_lost)
+                raise
             started = time.perf_counter()
             for trial, result in zip(trials, results):
                 self._tell(study, trial, result)
