@@ -150,11 +150,12 @@ def test_a_stopped_worker_gives_its_trials_back(tmp_path):
     assert trials[1].state == TrialState.WAITING and trials[1].params == mine.params
 
 
-def workers(tmp_path: Path, storage: str, n_trials: int, *overrides: str, env: dict | None = None) -> list:
-    """Two `train.py -m` search workers on study `shared`, their output in worker<i>.log."""
+def workers(tmp_path: Path, storage: str, n_trials: int, *overrides: str, env: dict | None = None,
+            indices=(0, 1)) -> list:
+    """`train.py -m` search workers on study `shared`, sweep<i>/ their folders, worker<i>.log their output."""
     env = {**(env or os.environ), "CI": "true", "OMP_NUM_THREADS": "1"}
     started = []
-    for index in range(2):
+    for index in indices:
         out = open(tmp_path / f"worker{index}.log", "w")
         command = [sys.executable, "train.py", "-m", *SEARCH, *overrides, f"hydra.sweeper.n_trials={n_trials}",
                    "hydra.sweeper.study_name=shared", f"hydra.sweeper.storage='{storage}'",  # quoted: a URL holds '='
@@ -194,6 +195,10 @@ def test_two_workers_share_a_study_on_the_journal_file(tmp_path):
     finished(tmp_path, workers(tmp_path, str(log), n_trials=6))
     study = optuna.load_study(study_name="shared", storage=JournalStorage(JournalFileBackend(str(log))))
     assert len(assert_one_study(study, 6, tmp_path)) == 2  # both workers contributed
+    late = workers(tmp_path, str(log), 6, indices=(2,))  # the study is done: nothing to run, the whole report
+    assert late[0].wait(timeout=300) == 0
+    report = yaml.safe_load((tmp_path / "sweep2" / "optimization_results.yaml").read_text())
+    assert report["this_worker"]["trials_run"] == 0 and not report["partial"] and report["complete"] == 6
 
 
 @pytest.mark.slow
