@@ -58,15 +58,17 @@ def fail_and_requeue(study: optuna.Study, trial_number: int, retry) -> bool:
     return True
 
 
-def fail_lost_trials(study: optuna.Study, retry) -> list[int]:
-    """Fail and re-queue the trials lost by gone workers; returns their numbers."""
+def fail_lost_trials(study: optuna.Study, retry, heartbeats: bool) -> list[int]:
+    """Fail and re-queue the trials lost by gone workers (and, with `heartbeats`, the trials whose
+    heartbeat went stale); returns their numbers."""
     failed = [trial.number for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
               if lost_by_a_gone_worker(trial) and fail_and_requeue(study, trial.number, retry)]
-    with warnings.catch_warnings():  # fail_stale_trials is "experimental"; a no-op without a heartbeat
-        warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
-        before = {t.number for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,))}
-        optuna.storages.fail_stale_trials(study)
-        failed += sorted({t.number for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,))} - before)
+    if heartbeats:
+        with warnings.catch_warnings():  # fail_stale_trials is "experimental"
+            warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)
+            before = {t.number for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,))}
+            optuna.storages.fail_stale_trials(study)
+            failed += sorted({t.number for t in study.get_trials(deepcopy=False, states=(TrialState.FAIL,))} - before)
     return failed
 
 
@@ -78,14 +80,17 @@ def give_back(study: optuna.Study, trials: list[optuna.Trial], retry) -> None:
         fail_and_requeue(study, trial.number, retry)
 
 
+def has_heartbeat(storage) -> bool:
+    return isinstance(storage, optuna.storages.RDBStorage) and storage.get_heartbeat_interval() is not None
+
+
 class Heartbeat:
     """While open, records a heartbeat for each of `trials` every `interval` seconds (RDB storages;
     nothing on the journal file). Optuna does this only inside study.optimize(); the sweeper asks
     and tells."""
 
     def __init__(self, storage, trials: list[optuna.Trial], interval: int) -> None:
-        heartbeat = isinstance(storage, optuna.storages.RDBStorage) and storage.get_heartbeat_interval()
-        self.record = storage.record_heartbeat if heartbeat else None
+        self.record = storage.record_heartbeat if has_heartbeat(storage) else None
         self.trials, self.interval, self.stop = trials, interval, threading.Event()
         self.thread = threading.Thread(target=self._beat, daemon=True)
 

@@ -40,8 +40,21 @@ from hydra.types import HydraContext, TaskFunction
 from omegaconf import DictConfig, OmegaConf
 
 from common.errors import InputError
-from hydra_plugins.touchstone_optuna_sweeper.lost_trials import Heartbeat, fail_lost_trials, give_back, record_job, requeuing
-from hydra_plugins.touchstone_optuna_sweeper.study_budget import budget_left, is_surplus, mark_surplus, progress
+from hydra_plugins.touchstone_optuna_sweeper.lost_trials import (
+    Heartbeat,
+    fail_lost_trials,
+    give_back,
+    has_heartbeat,
+    record_job,
+    requeuing,
+)
+from hydra_plugins.touchstone_optuna_sweeper.study_budget import (
+    budget_left,
+    is_surplus,
+    mark_surplus,
+    may_be_surplus,
+    progress,
+)
 from hydra_plugins.touchstone_optuna_sweeper.study_report import RESULTS, study_results, write_study_report
 from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, shown, storage_location
 from hydra_plugins.touchstone_optuna_sweeper.trial_seeded_sampler import TrialSeededTPESampler
@@ -109,9 +122,12 @@ class OptunaTPESweeper(Sweeper):
         # storage_s: time spent on the study between jobs (lost-trial check, ask and sampling, records,
         # tell), the storage's overhead per trial in optimization_results.yaml
         returns, ran, storage_s = [], 0, 0.0
+        stale_checked = -math.inf  # heartbeats go stale in minutes: look for stale trials once an interval
         while True:
             started = time.perf_counter()
-            for number in fail_lost_trials(study, self.retry_lost):
+            check_stale = has_heartbeat(storage) and started - stale_checked >= self.heartbeat_interval
+            stale_checked = started if check_stale else stale_checked
+            for number in fail_lost_trials(study, self.retry_lost, check_stale):
                 log.warning("trial %d: its worker is gone (killed?); marked failed%s", number,
                             ", re-queued" if self.lost_trial_retries else "")
             trials = self._ask(study, space, sweep_dir)
@@ -134,7 +150,7 @@ class OptunaTPESweeper(Sweeper):
             storage_s += time.perf_counter() - started
             ran += len(trials)
             returns.append(results)
-        fail_lost_trials(study, self.retry_lost)
+        fail_lost_trials(study, self.retry_lost, has_heartbeat(storage))
         self._report(study, fixed, location, sweep_dir, ran, storage_s)
         return returns
 
@@ -169,7 +185,8 @@ class OptunaTPESweeper(Sweeper):
             with warnings.catch_warnings():  # Optuna warns that its heartbeat expects study.optimize()
                 warnings.simplefilter("ignore", UserWarning)
                 trial = study.ask(space)
-            if is_surplus(trial.number, study.get_trials(deepcopy=False), self.n_trials):
+            if may_be_surplus(trial.number, self.n_trials) and is_surplus(
+                    trial.number, study.get_trials(deepcopy=False), self.n_trials):
                 mark_surplus(study, trial)  # other workers took the last trials at the same moment
                 break
             record_job(trial, str((sweep_dir / str(trial.number)).absolute()))

@@ -34,6 +34,12 @@ def is_surplus(trial_number: int, trials: list[FrozenTrial], n_trials: int) -> b
     return sum(t.number < trial_number for t in counted(trials)) >= n_trials
 
 
+def may_be_surplus(trial_number: int, n_trials: int) -> bool:
+    """Fewer trials than its number come before a trial: below n_trials it cannot be surplus
+    (spares a storage query per trial)."""
+    return trial_number >= n_trials
+
+
 def mark_surplus(study: optuna.Study, trial: optuna.Trial) -> None:
     trial.set_user_attr(SURPLUS, True)
     study.tell(trial, state=TrialState.FAIL)
