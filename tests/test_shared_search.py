@@ -18,6 +18,7 @@ from common.errors import InputError
 from common.run_status import mark_finished, mark_running, run_status, this_process
 from hydra_plugins.touchstone_optuna_sweeper.lost_trials import (
     JOB,
+    Heartbeat,
     fail_lost_trials,
     give_back,
     record_job,
@@ -139,6 +140,21 @@ def test_a_report_written_while_trials_run_elsewhere_says_partial(tmp_path):
     assert (tmp_path / "report" / "pareto.md").read_text().splitlines()[2].startswith("> Partial report")
     assert not (tmp_path / "report" / "pareto.png").exists()  # no cost measured: no figure of empty panels
     assert [p.name for p in (tmp_path / "report" / "tensorboard").iterdir()] == ["trial_0000"]
+
+
+def test_a_trial_whose_heartbeat_stops_is_failed_and_requeued(tmp_path):
+    """RDB storages (here SQLite): a worker on another host cannot be checked by its pid, but its
+    trial's heartbeat stops; after twice the interval any worker fails and re-queues the trial."""
+    storage = open_storage(f"sqlite:///{tmp_path / 's.db'}", 1, retry)
+    study = join_study(storage, "s", TrialSeededTPESampler(0, 2), "maximize", {})
+    with pytest.warns(UserWarning, match="Heartbeat"):  # Optuna expects study.optimize(); the sweeper asks
+        trial = study.ask(SPACE)
+    with Heartbeat(storage, [trial], interval=1):
+        assert fail_lost_trials(study, retry, heartbeats=True) == []  # beating
+    time.sleep(2.5)  # silent for longer than the grace period (2 intervals)
+    assert fail_lost_trials(study, retry, heartbeats=True) == [trial.number]
+    trials = study.get_trials()
+    assert trials[1].state == TrialState.WAITING and trials[1].params == trial.params
 
 
 def test_a_stopped_worker_gives_its_trials_back(tmp_path):
