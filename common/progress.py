@@ -56,7 +56,8 @@ class _Quiet:
         if self.enabled and now - self.last_line >= HEARTBEAT_S:
             self.last_line = now
             of = f"/{self.total}" if self.total else ""
-            log.info("%s: %d%s %s so far, %.0f s", self.desc, self.n, of, self.unit, now - self.start)
+            last = f" ({self.postfix})" if self.postfix else ""  # a net's latest losses and validation accuracy
+            log.info("%s: %d%s %s so far, %.0f s%s", self.desc, self.n, of, self.unit, now - self.start, last)
 
     def set_postfix(self, values=None, **kwargs):
         values = dict(values or {}, **kwargs)

@@ -24,6 +24,7 @@ chosen so that N processes compute what one process computes with the same globa
 import os
 import pickle
 import tempfile
+import time
 
 import numpy as np
 import torch
@@ -192,24 +193,29 @@ def module_device(module: nn.Module) -> torch.device:
 
 def fit_in_processes(estimator, n_processes: int, *fit_args, threads: int = 1, **fit_kwargs):
     """Fit a clone of `estimator` with `n_processes` processes on this machine (gloo, as
-    `torchrun --standalone --nproc_per_node=n_processes` would run it) and return rank 0's fitted
-    estimator: what the tests and bench/ddp_step_time.py compare with a one-process fit."""
-    context = multiprocessing.get_context("fork")
+    `torchrun --standalone --nproc_per_node=n_processes` would run it; one process: alone, in a
+    child all the same) and return rank 0's fitted estimator, with `fit_wall_s_`, the wall time of
+    its fit: what the tests and bench/ddp_step_time.py compare with a one-process fit."""
+    context = multiprocessing.get_context("fork")  # the children start with this process's imports
     results = context.SimpleQueue()
     with tempfile.TemporaryDirectory() as folder:
-        multiprocessing.start_processes(  # fork: the children start with this process's imports
+        multiprocessing.start_processes(
             _fit_rank, args=(n_processes, f"file://{folder}/rendezvous", threads, estimator, fit_args, fit_kwargs,
                              results), nprocs=n_processes, start_method="fork")
     return pickle.loads(results.get())  # our own child's bytes, never a user's file
 
 
 def _fit_rank(rank, n_processes, rendezvous, threads, estimator, fit_args, fit_kwargs, results):
-    os.environ.update(RANK=str(rank), WORLD_SIZE=str(n_processes), LOCAL_RANK=str(rank))
     torch.set_num_threads(threads)
-    dist.init_process_group("gloo", init_method=rendezvous, rank=rank, world_size=n_processes)
+    if n_processes > 1:
+        os.environ.update(RANK=str(rank), WORLD_SIZE=str(n_processes), LOCAL_RANK=str(rank))
+        dist.init_process_group("gloo", init_method=rendezvous, rank=rank, world_size=n_processes)
     try:
+        start = time.perf_counter()
         fitted = clone(estimator).fit(*fit_args, **fit_kwargs)
+        fitted.fit_wall_s_ = time.perf_counter() - start
         if rank == 0:
             results.put(pickle.dumps(fitted))  # by value: torch's shared-memory tensors die with the child
     finally:
-        dist.destroy_process_group()
+        if dist.is_initialized():
+            dist.destroy_process_group()

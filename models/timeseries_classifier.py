@@ -11,8 +11,12 @@ Adam at 1e-3, the learning rate multiplied by `lr_factor` after `lr_plateau_pati
 without a lower loss, down to `min_lr`; small batches capped at a tenth of the training set;
 many epochs). Both keep the epoch with the best validation score (accuracy, ties broken by the
 lower validation loss) and restore its weights at the end: the reported model is never simply
-the last epoch. `early_stopping_patience` ends training after that many epochs without a better
-score.
+the last epoch. Early stopping ends training when no improvement that matters (a higher
+validation accuracy or, while accuracy is below 1, the same accuracy with a validation loss lower
+by more than `early_stopping_min_delta`) came for `patience(epoch of the last one)` epochs: as many
+again as it took to get there, between `early_stopping_min_patience` and `early_stopping_patience`.
+
+Several processes (torchrun, submitit tasks) train one net as one process would: models/distributed.py.
 
 BatchNorm: the stored (eval-mode) statistics are a running average over the last few training
 batches, which with few optimiser steps have not settled (a model scored 0.85 on its own training
@@ -22,10 +26,11 @@ does after weight averaging): the scored and the deployed model are the same net
 training trajectory is unchanged (training batches normalise with their own statistics).
 
 Resumable: with `checkpoint_path` the whole training state (weights, optimiser, schedule, RNG
-states, best epoch, early-stopping counter, history) is written after every epoch, and
+states, best epoch, last improvement that mattered, history) is written after every epoch, and
 `resume_from` continues from such a file to the same result as an uninterrupted fit (CPU).
 """
 import copy
+import logging
 import math
 import os
 import time
@@ -41,21 +46,23 @@ from common.progress import HEARTBEAT_S, on_terminal, progress
 from models.distributed import TrainingGroup, rank_seed
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
+log = logging.getLogger(__name__)
 OPTIMISERS = ("sgd", "adam")
 SCHEDULES = ("milestones", "plateau")
 # What a checkpoint must agree on with the fit that resumes it (max_epochs may grow: a run can
 # be extended; device and progress do not change the result).
 RESUME_KEYS = ("optimizer", "lr", "momentum", "weight_decay", "lr_schedule", "milestones", "gamma", "lr_factor",
-               "lr_plateau_patience", "min_lr", "early_stopping_patience", "batch_size", "max_batch_fraction",
-               "recalibrate_batchnorm", "seed")
+               "lr_plateau_patience", "min_lr", "early_stopping_patience", "early_stopping_min_patience",
+               "early_stopping_min_delta", "batch_size", "max_batch_fraction", "recalibrate_batchnorm", "seed")
 CHECKPOINT_KEYS = ("fingerprint", "epoch", "stopped", "elapsed_s", "module", "optimiser", "schedule", "best",
-                   "best_state", "waited", "history", "generator", "torch_rng", "cuda_rng")
+                   "best_state", "improved", "history", "generator", "torch_rng", "cuda_rng")
 
 
 class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
     def __init__(self, network=None, modalities=None, optimizer="sgd", lr=0.05, momentum=0.9, weight_decay=0.0,
                  lr_schedule="milestones", milestones=(5, 15, 25), gamma=0.1, lr_factor=0.5,
-                 lr_plateau_patience=50, min_lr=0.0, early_stopping_patience=None, batch_size=128,
+                 lr_plateau_patience=50, min_lr=0.0, early_stopping_patience=None, early_stopping_min_patience=None,
+                 early_stopping_min_delta=0.0, batch_size=128,
                  max_batch_fraction=None, max_epochs=40, recalibrate_batchnorm=False, device="cpu", seed=0,
                  progress=True, checkpoint_path=None, resume_from=None):
         self.network = network
@@ -71,6 +78,8 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         self.lr_plateau_patience = lr_plateau_patience
         self.min_lr = min_lr
         self.early_stopping_patience = early_stopping_patience
+        self.early_stopping_min_patience = early_stopping_min_patience
+        self.early_stopping_min_delta = early_stopping_min_delta
         self.batch_size = batch_size
         self.max_batch_fraction = max_batch_fraction
         self.max_epochs = max_epochs
@@ -190,6 +199,27 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         """Higher validation accuracy, ties broken by lower validation loss."""
         return best is None or score[0] > best[0] or (score[0] == best[0] and score[1] < best[1])
 
+    def _matters(self, score, improved) -> bool:
+        """An improvement that resets early stopping's count, against the score of the last one
+        (`improved`: accuracy, loss, epoch): a higher validation accuracy or, while some validation
+        windows are still wrong, the same accuracy with a validation loss lower by more than
+        early_stopping_min_delta. Once every validation window is right, a lower loss is only more
+        confidence: it still picks the kept epoch but no longer holds training (a tiny set ran 731
+        epochs at validation accuracy 1.0 while its loss crept down)."""
+        return improved is None or score[0] > improved[0] or (
+            score[0] == improved[0] < 1.0 and score[1] < improved[1] - self.early_stopping_min_delta)
+
+    def patience(self, improved_epoch: int) -> int | None:
+        """Epochs to wait after the last improvement that mattered, at epoch `improved_epoch`:
+        as many again as it took to get there, at least early_stopping_min_patience and at most
+        early_stopping_patience (a set learnt in 10 epochs is not waited on for 100; one still
+        learning at epoch 300 gets the whole patience). Without a minimum: the patience, fixed."""
+        if self.early_stopping_patience is None:
+            return None
+        if self.early_stopping_min_patience is None:
+            return int(self.early_stopping_patience)
+        return min(int(self.early_stopping_patience), max(int(self.early_stopping_min_patience), improved_epoch))
+
     # -- contract ---------------------------------------------------------------------------
     @flush_denormals()
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
@@ -220,13 +250,13 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         Xt, yt = torch.as_tensor(X), torch.as_tensor(y)
         y_val_t = torch.as_tensor(np.asarray(y_val, dtype=np.int64)) if X_val is not None else None
         fingerprint = {**self._fingerprint(X.shape[1:]), "world_size": group.size}  # dropout draws per rank
-        self.history_, best, best_state, waited, first_epoch, elapsed_before = [], None, None, 0, 0, 0.0
+        self.history_, best, best_state, improved, first_epoch, elapsed_before = [], None, None, None, 0, 0.0
         if self.resume_from is not None:
             state = self._load_checkpoint(fingerprint)
             self.module_.load_state_dict(state["module"])
             optimiser.load_state_dict(state["optimiser"])
             schedule.load_state_dict(state["schedule"])
-            self.history_, best, best_state, waited = state["history"], state["best"], state["best_state"], state["waited"]
+            self.history_, best, best_state, improved = state["history"], state["best"], state["best_state"], state["improved"]
             first_epoch, elapsed_before = state["epoch"], state["elapsed_s"]
             generator.set_state(state["generator"])
             torch.set_rng_state(state["rank_rngs"][group.rank] if group.size > 1 else state["torch_rng"])
@@ -285,15 +315,16 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                 score = (float(epoch), 0.0)
             self.history_.append(record)
             if self._better(score, best):
-                best, waited = score, 0
+                best = score
                 best_state = copy.deepcopy(self.module_.state_dict())
-            else:
-                waited += 1
+            if self._matters(score, improved):
+                improved = (*score, epoch + 1)
             if self.lr_schedule == "plateau":  # the references watch the loss; we watch validation's
                 schedule.step(record.get("val_loss", train_loss))
             else:
                 schedule.step()
-            stopped = self.early_stopping_patience is not None and waited >= self.early_stopping_patience
+            patience = self.patience(improved[2])
+            stopped = patience is not None and epoch + 1 - improved[2] >= patience
             if self.checkpoint_path is not None:
                 rank_rngs = group.gather(torch.get_rng_state())
             if self.checkpoint_path is not None and group.is_writer:
@@ -301,7 +332,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                     "fingerprint": fingerprint, "epoch": epoch + 1, "stopped": stopped,
                     "elapsed_s": record["elapsed_s"], "module": self.module_.state_dict(),
                     "optimiser": optimiser.state_dict(), "schedule": schedule.state_dict(), "best": best,
-                    "best_state": best_state, "waited": waited, "history": self.history_,
+                    "best_state": best_state, "improved": improved, "history": self.history_,
                     "generator": generator.get_state(), "torch_rng": rank_rngs[0],
                     "cuda_rng": torch.cuda.get_rng_state_all() if torch.cuda.is_available() else None,
                     **({"rank_rngs": rank_rngs} if group.size > 1 else {})})
@@ -309,6 +340,9 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                 epoch_callback(record)
             bar.set_postfix({k: f"{v:.3f}" for k, v in record.items() if k.endswith(("loss", "accuracy"))})
             if stopped:
+                log.info("%s: stopped at epoch %d, no improvement that matters since epoch %d (val accuracy %.3f, "
+                         "val loss %.4f; patience %d epochs)", type(self.module_).__name__, epoch + 1, improved[2],
+                         improved[0], improved[1], patience)
                 break
         bar.close()
         group.release(self.module_)
@@ -318,6 +352,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         self.best_epoch_ = next((r["epoch"] for r in self.history_ if X_val is not None
                                  and (r["val_accuracy"], r["val_loss"]) == best), len(self.history_))
         self.n_epochs_ = len(self.history_)
+        self.improved_epoch_ = improved[2] if improved is not None else 0  # the last improvement that mattered
         self.n_features_in_ = X.shape[1]
         return self
 

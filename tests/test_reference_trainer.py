@@ -63,6 +63,32 @@ def test_early_stopping_ends_a_run_without_progress():
     assert model.n_epochs_ < 50 and model.n_epochs_ - model.best_epoch_ == 2
 
 
+def test_the_patience_is_as_long_again_as_the_last_improvement_took_within_its_bounds():
+    model = small(early_stopping_patience=100, early_stopping_min_patience=20)
+    assert [model.patience(epoch) for epoch in (1, 20, 45, 100, 400)] == [20, 20, 45, 100, 100]
+    assert small(early_stopping_patience=100).patience(5) == 100  # no minimum: a fixed patience
+    assert small(early_stopping_patience=None).patience(5) is None  # every epoch runs
+
+
+def test_a_saturated_task_stops_once_only_the_loss_creeps_down():
+    """A tiny set learnt in a few epochs: validation accuracy saturates at 1 and the loss keeps
+    creeping down. Counting every lower loss as progress (a fixed patience of 100 after the last
+    better score) cannot stop before epoch 101; improvements that matter stop it far earlier, at
+    full accuracy, while the loss was still falling (the old rule would still be waiting)."""
+    X, y = generate("phase", 60, seed=11, length=200)
+    train, val, test = split(y, 0)
+    model = small(lr_plateau_patience=50, batch_size=64, max_epochs=300, early_stopping_patience=100,
+                  early_stopping_min_patience=20, early_stopping_min_delta=0.01)
+    model.fit(X[train], y[train], X[val], y[val])
+    assert model.n_epochs_ <= 60, model.n_epochs_
+    assert model.history_[model.best_epoch_ - 1]["val_accuracy"] == 1.0
+    assert float((model.predict(X[test]) == y[test]).mean()) >= 0.9
+    scores = [(r["val_accuracy"], -r["val_loss"]) for r in model.history_]
+    assert model.n_epochs_ == model.improved_epoch_ + model.patience(model.improved_epoch_) < 101
+    assert any(scores[e] > max(scores[:e]) for e in range(model.improved_epoch_, model.n_epochs_)), \
+        "the loss kept falling while the count ran: the old rule would have gone on"
+
+
 def test_recalibrated_batchnorm_holds_the_training_set_statistics():
     X, y = generate("phase", 40, seed=2)
     model = small(max_epochs=2).fit(X, y)
