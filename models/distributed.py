@@ -199,10 +199,16 @@ def fit_in_processes(estimator, n_processes: int, *fit_args, threads: int = 1, *
     context = multiprocessing.get_context("fork")  # the children start with this process's imports
     results = context.SimpleQueue()
     with tempfile.TemporaryDirectory() as folder:
-        multiprocessing.start_processes(
+        children = multiprocessing.start_processes(
             _fit_rank, args=(n_processes, f"file://{folder}/rendezvous", threads, estimator, fit_args, fit_kwargs,
-                             results), nprocs=n_processes, start_method="fork")
-    return pickle.loads(results.get())  # our own child's bytes, never a user's file
+                             results), nprocs=n_processes, start_method="fork", join=False)
+        fitted = None
+        while True:  # read while rank 0 writes (a large estimator fills the pipe), until all have ended
+            if fitted is None and not results.empty():
+                fitted = results.get()
+            if children.join(timeout=0.1):  # raises when a child failed
+                break
+    return pickle.loads(fitted if fitted is not None else results.get())  # our own child's bytes, never a user's file
 
 
 def _fit_rank(rank, n_processes, rendezvous, threads, estimator, fit_args, fit_kwargs, results):
