@@ -140,6 +140,11 @@ def test_a_report_written_while_trials_run_elsewhere_says_partial(tmp_path):
     assert (tmp_path / "report" / "pareto.md").read_text().splitlines()[2].startswith("> Partial report")
     assert not (tmp_path / "report" / "pareto.png").exists()  # no cost measured: no figure of empty panels
     assert [p.name for p in (tmp_path / "report" / "tensorboard").iterdir()] == ["trial_0000"]
+    by_hand = subprocess.run([sys.executable, "-m", "hydra_plugins.touchstone_optuna_sweeper.study_report",
+                              str(tmp_path / "s.log"), "s", str(tmp_path / "by_hand")], cwd=ROOT, capture_output=True,
+                             text=True, timeout=120)
+    assert by_hand.returncode == 0 and "1 of 3 trials complete, 1 running, 0 waiting (partial)" in by_hand.stdout
+    assert yaml.safe_load((tmp_path / "by_hand" / "optimization_results.yaml").read_text())["trials"] == written["trials"]
 
 
 def test_a_trial_whose_heartbeat_stops_is_failed_and_requeued(tmp_path):

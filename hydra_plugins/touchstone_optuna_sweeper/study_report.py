@@ -16,7 +16,6 @@ from pathlib import Path
 
 import optuna
 from omegaconf import OmegaConf
-from optuna.trial import TrialState
 
 from common.atomic import atomic_write_text
 from hydra_plugins.touchstone_optuna_sweeper.lost_trials import trial_job
@@ -72,16 +71,32 @@ def write_study_report(sweep_dir: Path, results: dict, parallel: bool) -> None:
 
 
 def main(argv: list[str]) -> None:
-    from hydra_plugins.touchstone_optuna_sweeper.study_storage import open_storage, shown, storage_location
+    from common.errors import InputError
+    from hydra_plugins.touchstone_optuna_sweeper.study_storage import (
+        JOURNAL_SCHEME,
+        open_storage,
+        shown,
+        storage_location,
+    )
 
     if len(argv) != 3:
         sys.exit("usage: python -m hydra_plugins.touchstone_optuna_sweeper.study_report <storage> <study name> <folder>")
-    location = storage_location(argv[0], argv[1], Path(argv[2]))
-    study = optuna.load_study(study_name=argv[1], storage=open_storage(location, 60, None))
-    n_trials = study.user_attrs.get("definition", {}).get("n_trials", len(study.trials))
-    folder = Path(argv[2])
+    storage, name, folder = argv[0], argv[1], Path(argv[2])
+    try:
+        location = storage_location(storage, name, folder)
+        journal = Path(location.removeprefix(JOURNAL_SCHEME))
+        if location.startswith(JOURNAL_SCHEME) and not journal.is_file():
+            raise InputError(f"{journal}: no such file")
+        opened = open_storage(location, 60, None)
+        if name not in optuna.get_all_study_names(opened):
+            raise InputError(f"no study {name!r} in {shown(location)}")
+    except InputError as error:
+        print(f"error: {error}", file=sys.stderr)
+        sys.exit(2)
+    study = optuna.load_study(study_name=name, storage=opened)
     folder.mkdir(parents=True, exist_ok=True)
-    results = study_results(study, n_trials, shown(location))
+    results = study_results(study, study.user_attrs.get("definition", {}).get("n_trials", len(study.trials)),
+                            shown(location))
     write_study_report(folder, results, parallel=results["workers"] > 1)
     print(f"{folder / RESULTS}: {results['complete']} of {results['n_trials']} trials complete"
           + (f", {results['running']} running, {results['waiting']} waiting (partial)" if results["partial"] else ""))
