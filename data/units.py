@@ -5,8 +5,8 @@ underscore-separated word (`r_01_ohm`, `depth_mm`, `pressure_pa`, `force_level_n
 `triboelectric_na`). This module reads that word, case-insensitively, and says which quantity the
 column holds and the closed interval its values can lie in: a reading outside it is a broken
 file or a wrong unit, not data to learn from. The validators refuse such values
-(data/readers/table_reader.py, data/readers/recording_reader.py); prediction interval bounds are clipped to the
-same range (clip_to_range: runs/regression.py, export/onnx_predictor.py).
+(data/readers/table_reader.py, data/readers/recording_reader.py); a regression's predictions and interval
+bounds are clipped to the same range (clip_columns: runs/regression.py, export/onnx_predictor.py).
 
     physical_range("r_03_ohm")    -> PhysicalRange("resistance", 0.0, inf, ...)
     physical_range("shear_x_n")   -> None   (a force component: any sign)
@@ -121,11 +121,17 @@ def physical_range(column: str) -> PhysicalRange | None:
 
 
 def clip_to_range(values, column: str) -> np.ndarray:
-    """`values` clipped to the column's physical range (unchanged for a column without a rule): an
-    interval bound beyond it (a pressure below 0 Pa) would only say that the quantity is physical."""
+    """`values` clipped to the column's physical range (unchanged for a column without a rule): a
+    prediction or an interval bound beyond it (a pressure below 0 Pa) is never nearer the truth."""
     rule = physical_range(column)
     values = np.asarray(values, dtype=np.float64)
     return values if rule is None else np.clip(values, rule.low, rule.high)
+
+
+def clip_columns(values, columns) -> np.ndarray:
+    """(n, len(columns)) values, each column clipped to its physical range (clip_to_range)."""
+    values = np.asarray(values, dtype=np.float64).reshape(-1, len(columns))
+    return np.column_stack([clip_to_range(values[:, k], column) for k, column in enumerate(columns)])
 
 
 def first_outside(values, column: str):

@@ -25,7 +25,7 @@ import pandas as pd
 from common.errors import InputError
 from common.threads import configured_threads
 from data.readers.table_reader import check_numeric_columns, where
-from data.units import clip_to_range
+from data.units import clip_columns
 
 KINDS = ("regression", "classification")
 # The graph's one input (metadata 'input'; by kind when a file has none) and its first output per
@@ -222,12 +222,13 @@ class OnnxPredictor:
         if self.kind == "classification":
             return self._classes_frame(out["probabilities"])
         prediction = out["prediction"].astype(np.float64)  # bounds in float64: float32 sums could overflow
-        result = pd.DataFrame(prediction, columns=self.targets)
+        # predictions and bounds within each target's physical range (data/units.py), as the run reports them
+        result = pd.DataFrame(clip_columns(prediction, self.targets), columns=self.targets)
         if "interval_half_width" in out:
             half = out["interval_half_width"].astype(np.float64)
-            for k, target in enumerate(self.targets):  # bounds within the target's physical range (data/units.py)
-                result[f"{target}_lower95"] = clip_to_range(prediction[:, k] - half[:, k], target)
-                result[f"{target}_upper95"] = clip_to_range(prediction[:, k] + half[:, k], target)
+            lower, upper = clip_columns(prediction - half, self.targets), clip_columns(prediction + half, self.targets)
+            for k, target in enumerate(self.targets):
+                result[f"{target}_lower95"], result[f"{target}_upper95"] = lower[:, k], upper[:, k]
         return result
 
     # -- windows of recordings: a time-series classifier --------------------------------------

@@ -13,7 +13,7 @@ from omegaconf import DictConfig, OmegaConf
 
 from common.errors import InputError
 from common.progress import phase
-from data.units import clip_to_range
+from data.units import clip_columns
 from models.deployable import RegressionPipeline, regression_pipeline
 from runs.report.analysis import edge_vs_centre, feature_ablation, identifiability_map, interval_report
 from runs.report.metrics import regression_metrics
@@ -37,13 +37,6 @@ class RegressionResult:
     importances: tuple | None = None            # (candidate name, values) of a tree model
     correlation: tuple | None = None            # (matrix, labels): targets and top features
     hparams: dict = field(default_factory=dict)
-
-
-def physical_bounds(lower, upper, targets) -> tuple[np.ndarray, np.ndarray]:
-    """Interval bounds clipped to each target's physical range (data/units.py: a pressure, a
-    force's magnitude or a depth is >= 0), as predict.py clips them."""
-    clip = lambda bound: np.column_stack([clip_to_range(bound[:, k], t) for k, t in enumerate(targets)])  # noqa: E731
-    return clip(lower), clip(upper)
 
 
 def _model_size(model) -> dict:
@@ -127,8 +120,11 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
     model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
 
-    def predict(X):  # (n, n_targets) even for one target, which scikit-learn's models return as a vector
-        return np.asarray(model.predict(X)).reshape(len(X), -1)
+    def predict(X):
+        """(n, n_targets) even for one target (scikit-learn returns a vector), within each target's
+        physical range (data/units.py: a pressure, a depth or a force's magnitude is >= 0), as
+        predict.py reports them."""
+        return clip_columns(model.predict(X), targets)
 
     pred_test = predict(X_test)
     metrics = {
@@ -157,8 +153,7 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
         if model.calibration_note_:
             log.warning(model.calibration_note_)
             metrics["uncertainty"]["calibration_note"] = model.calibration_note_
-        mean, lower, upper = model.predict_interval(X_test, calibrated=True)
-        result.interval = (mean, *physical_bounds(lower, upper, targets))
+        result.interval = tuple(clip_columns(part, targets) for part in model.predict_interval(X_test, calibrated=True))
         if SHEET_TARGETS <= set(targets):
             xy = y_test[:, [targets.index("x_mm"), targets.index("y_mm")]]
             ident = identifiability_map(xy, y_test[:, targets.index("depth_mm")], sigma, np.abs(y_test - mean),

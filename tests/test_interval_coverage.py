@@ -78,9 +78,9 @@ def test_a_runs_pressure_bounds_are_non_negative_in_the_report_and_in_predict(co
     assert metrics["uncertainty"]["calibration_rows"] == data["n_calibration"] + data["n_val"] >= 19
     predictions = pd.read_csv(tmp_path / "run" / "predictions.csv")
     assert (predictions["pressure_pa_lower95"] == 0.0).any()    # clipped, not merely positive by chance
-    assert (predictions[["pressure_pa_lower95", "depth_mm_lower95"]] >= 0.0).all().all()
+    assert (predictions[["pressure_pa", "pressure_pa_lower95", "depth_mm", "depth_mm_lower95"]] >= 0.0).all().all()
     predicted = OnnxPredictor(tmp_path / "run" / "model.onnx").predict_table(predictions, "predictions.csv")
-    for column in ("pressure_pa_lower95", "pressure_pa_upper95", "depth_mm_lower95"):
+    for column in ("pressure_pa", "pressure_pa_lower95", "pressure_pa_upper95", "depth_mm_lower95"):
         np.testing.assert_allclose(predicted[column], predictions[column], rtol=1e-4, atol=1e-3)
     saved = json.loads((tmp_path / "run" / "metrics.json").read_text())
     assert saved["uncertainty"]["coverage_calibrated"] == pytest.approx(metrics["uncertainty"]["coverage_calibrated"])

@@ -18,7 +18,9 @@ from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 CLASSIFIERS = {"prcnn", "rescnn", "inceptiontime", "lstm_fcn"}  # tested in test_tsc_models.py
-MODELS = sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml") if p.stem not in CLASSIFIERS)
+TABLE_CLASSIFIERS = {"mlp", "logistic_regression"}                # tested in test_table_classification.py
+MODELS = sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml")
+                if p.stem not in CLASSIFIERS | TABLE_CLASSIFIERS)
 # common/atomic.py renders each output into tempfile.mkstemp(prefix=f".{name}.", suffix=suffix) in
 # the output's folder: ".metrics.json.k2x9_a1b.json", ".parity.png.q0w8r7t6.png". A hidden
 # name, then more name, a dot and more: what a crashed or forgotten atomic write leaves behind.
@@ -32,12 +34,14 @@ def atomic_leftovers(folder: Path) -> list[Path]:
 def test_every_model_config_is_tested(compose_config):
     """Every configs/model/*.yaml trains in a parametrised run test: the regression models below,
     the time-series classifiers (which need recordings) in test_tsc_models.py (prcnn through the
-    textures13 experiment, the others in test_baselines_train_through_hydra). A classifier
+    textures13 experiment, the others in test_baselines_train_through_hydra), the table
+    classifiers in test_table_classification.py. A classifier
     listed as a regression model, or the reverse, fails here."""
     for name in sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml")):
         overrides = [f"model={name}"] + (["experiment=materials10"] if name in CLASSIFIERS else [])
         target = compose_config(overrides).model._target_
         assert target.endswith("TimeSeriesClassifier") == (name in CLASSIFIERS), (name, target)
+        assert target.endswith("TableClassifier") == (name in TABLE_CLASSIFIERS), (name, target)
     assert {"resmlp", "random_forest", "extra_trees", "decision_tree", "blend"} <= set(MODELS)
 
 
