@@ -97,20 +97,21 @@ def main() -> None:
     engines = ["journal"] + (["postgresql"] if missing() is None else [])
     if missing():
         print(f"PostgreSQL skipped: {missing()}")
-    print(f"load average before: {os.getloadavg()[0]:.1f}; {os.cpu_count()} cores; {args.trials} trials per study")
-    print("| storage | workers | trials/min | speed-up vs 1 worker | storage overhead (ms/trial) |")
-    print("|---|---|---|---|---|")
+    print(f"{os.cpu_count()} cores; {args.trials} trials per study; load average: the 1-minute figure before and after")
+    print("| storage | workers | trials/min | speed-up vs 1 worker | storage overhead (ms/trial) | load average |")
+    print("|---|---|---|---|---|---|")
     for engine in engines:
         rates = {}
         for workers in args.workers:
+            load_before = os.getloadavg()[0]
             runs = [one_study(engine, workers, args.trials) for _ in range(args.repeats)]
+            load = f"{load_before:.1f}–{os.getloadavg()[0]:.1f}"
             rates[workers] = rate = np.array([r["trials_per_min"] for r in runs])
             overhead = np.array([r["overhead_ms"] for r in runs])
             speedup = f"{rate.mean() / rates[1].mean():.2f}×" if 1 in rates else "—"
             print(f"| {engine} | {workers} | {rate.mean():.1f} ± {rate.std(ddof=1) if len(rate) > 1 else 0:.1f} "
-                  f"| {speedup} | {overhead.mean():.1f} ± {overhead.std(ddof=1) if len(overhead) > 1 else 0:.1f} |",
-                  flush=True)
-    print(f"load average after: {os.getloadavg()[0]:.1f}")
+                  f"| {speedup} | {overhead.mean():.1f} ± {overhead.std(ddof=1) if len(overhead) > 1 else 0:.1f} "
+                  f"| {load} |", flush=True)
     if args.kill_runs:
         print("\n| storage | two-worker studies | with a worker killed | lost | duplicated | re-queued | both contributed |")
         print("|---|---|---|---|---|---|---|")
