@@ -1,6 +1,7 @@
 """The reference training recipe (trainer=reference) and what every recipe now shares: the best
 validation epoch is the model kept, BatchNorm statistics that settle, batches a training set allows."""
 import functools
+import logging
 
 import pytest
 import torch
@@ -87,6 +88,20 @@ def test_a_saturated_task_stops_once_only_the_loss_creeps_down():
     assert model.n_epochs_ == model.improved_epoch_ + model.patience(model.improved_epoch_) < 101
     assert any(scores[e] > max(scores[:e]) for e in range(model.improved_epoch_, model.n_epochs_)), \
         "the loss kept falling while the count ran: the old rule would have gone on"
+
+
+def test_progress_lines_off_a_terminal_show_the_validation_accuracy(caplog, monkeypatch):
+    """Every periodic line (each epoch here) after the first epoch, and the closing one, carry the
+    last epoch's validation numbers, not just a count."""
+    monkeypatch.setenv("CI", "true")
+    monkeypatch.setattr("common.progress.HEARTBEAT_S", 0.0)
+    X, y = generate("frequency", 40, seed=1)
+    train, val, _ = split(y, 1)
+    with caplog.at_level(logging.INFO, logger="touchstone"):
+        small(max_epochs=3, progress=True).fit(X[train], y[train], X[val], y[val])
+    lines = [r.getMessage() for r in caplog.records if r.getMessage().startswith("PRCNN: ")]
+    assert [line.split(" epochs")[0] for line in lines] == ["PRCNN: 1/3", "PRCNN: 2/3", "PRCNN: 3/3", "PRCNN: 3"]
+    assert all("val_loss=" in line and "val_accuracy=" in line for line in lines[1:]), lines
 
 
 def test_recalibrated_batchnorm_holds_the_training_set_statistics():
