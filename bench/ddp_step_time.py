@@ -83,7 +83,8 @@ def main():
             if per_rank:
                 difference, identical = "— (dropout per rank)", "—"
             else:
-                difference = f"{max(np.abs(np.subtract(f.step_losses_, runs[1][0].step_losses_)).max() for f in fitted):.1e}"
+                reference = runs[1][0].step_losses_
+                difference = f"{max(np.abs(np.subtract(f.step_losses_, reference)).max() for f in fitted):.1e}"
                 identical = all(f.step_losses_ == fitted[0].step_losses_ for f in fitted)
             accuracy = (mean_sd([100 * float((f.predict(test[0]) == test[1]).mean()) for f in fitted]) + " %"
                         if test is not None else "—")

@@ -28,10 +28,10 @@ import time
 
 import numpy as np
 import torch
-import torch.multiprocessing as multiprocessing
 import torch.distributed as dist
-from torch import nn
+import torch.multiprocessing as multiprocessing
 from sklearn.base import clone
+from torch import nn
 from torch.nn.parallel import DistributedDataParallel
 
 from common.distributed import export_submitit_environment, launched_local_rank, launched_world_size

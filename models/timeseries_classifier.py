@@ -256,7 +256,8 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             self.module_.load_state_dict(state["module"])
             optimiser.load_state_dict(state["optimiser"])
             schedule.load_state_dict(state["schedule"])
-            self.history_, best, best_state, improved = state["history"], state["best"], state["best_state"], state["improved"]
+            self.history_, best, best_state = state["history"], state["best"], state["best_state"]
+            improved = state["improved"]
             first_epoch, elapsed_before = state["epoch"], state["elapsed_s"]
             generator.set_state(state["generator"])
             torch.set_rng_state(state["rank_rngs"][group.rank] if group.size > 1 else state["torch_rng"])

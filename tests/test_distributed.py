@@ -131,8 +131,8 @@ def test_a_sweep_job_with_two_submitit_tasks_trains_on_both(tmp_path):
     """Hydra's submitit launcher with tasks_per_node=2 (the local executor here, SLURM on a cluster):
     both tasks join one process group through submitit's environment; the job folder is rank 0's."""
     result = subprocess.run(
-        [sys.executable, str(ROOT / "train.py"), "-m", "hydra/launcher=submitit_local", "hydra.launcher.tasks_per_node=2",
-         "model=resmlp", "scene.n_samples=100", "scene.grid_nodes=21", "scene.progress=false", "trainer.max_epochs=2",
+        [sys.executable, str(ROOT / "train.py"), "-m", "hydra/launcher=submitit_local",
+         "hydra.launcher.tasks_per_node=2", "model=resmlp", "scene.n_samples=100", "scene.grid_nodes=21", "scene.progress=false", "trainer.max_epochs=2",
          "trainer.progress=false", f"hydra.sweep.dir={tmp_path / 'sweep'}"],
         capture_output=True, text=True, cwd=tmp_path, env={**os.environ, "CI": "true"}, timeout=600)
     assert result.returncode == 0, result.stderr[-3000:]
