@@ -21,6 +21,7 @@ chosen so that N processes compute what one process computes with the same globa
 - Validation runs on every rank (same weights, same windows) and rank 0's result is the one every
   rank acts on (`agree`), so the learning-rate schedule and early stopping never diverge.
 """
+import atexit
 import os
 import pickle
 import tempfile
@@ -46,7 +47,13 @@ def join_process_group() -> bool:
         return False
     if not dist.is_initialized():
         dist.init_process_group("cpu:gloo,cuda:nccl" if torch.cuda.is_available() else "gloo")
+        atexit.register(_leave_process_group)  # left alive at exit, gloo's threads abort the process
     return True
+
+
+def _leave_process_group() -> None:
+    if dist.is_initialized():
+        dist.destroy_process_group()
 
 
 def rank_seed(seed: int, rank: int) -> int:

@@ -126,6 +126,18 @@ def test_train_py_under_torchrun_writes_one_run_folder_from_rank_zero(tmp_path):
     assert list(scratch.glob("touchstone-rank*")) == []
 
 
+def test_a_config_mistake_under_torchrun_is_one_line_from_rank_zero_and_no_folder(tmp_path):
+    torchrun = shutil.which("torchrun", path=str(Path(sys.executable).parent))
+    result = subprocess.run([torchrun, "--standalone", "--nproc_per_node=2", str(ROOT / "train.py"), "model=resmlp",
+                             "trainer.max_epochs=0"], capture_output=True, text=True, cwd=tmp_path,
+                            env={**os.environ, "CI": "true"}, timeout=300)
+    assert result.returncode != 0
+    errors = [line for line in result.stderr.splitlines() if line.startswith("error: ")]
+    assert errors == ["error: trainer.max_epochs must be an integer >= 1, got 0"]
+    assert "exitcode: 2" in result.stderr and "SIGABRT" not in result.stderr  # every rank ends with code 2
+    assert not (tmp_path / "outputs").exists()
+
+
 @pytest.mark.slow
 def test_a_sweep_job_with_two_submitit_tasks_trains_on_both(tmp_path):
     """Hydra's submitit launcher with tasks_per_node=2 (the local executor here, SLURM on a cluster):
