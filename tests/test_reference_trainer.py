@@ -71,6 +71,15 @@ def test_the_patience_is_as_long_again_as_the_last_improvement_took_within_its_b
     assert small(early_stopping_patience=None).patience(5) is None  # every epoch runs
 
 
+def test_what_counts_as_an_improvement_that_matters():
+    model = small(early_stopping_min_delta=0.01)
+    last = (0.8, 0.50, 5)  # accuracy, loss, epoch of the last improvement that mattered
+    assert model._matters((0.9, 0.9, 6), last)  # a higher accuracy, whatever the loss
+    assert model._matters((0.8, 0.48, 6), last) and not model._matters((0.8, 0.495, 6), last)
+    assert not model._matters((0.7, 0.1, 6), last)
+    assert not model._matters((1.0, 0.01, 6), (1.0, 0.5, 5))  # every window right: the loss no longer counts
+
+
 def test_a_saturated_task_stops_once_only_the_loss_creeps_down():
     """A tiny set learnt in a few epochs: validation accuracy saturates at 1 and the loss keeps
     creeping down. Counting every lower loss as progress (a fixed patience of 100 after the last
