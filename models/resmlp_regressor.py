@@ -22,6 +22,7 @@ from common.progress import progress
 from data.splits.indices import carve_validation
 from models.nets.resmlp import ResMLP
 from models.distributed import TrainingGroup, rank_seed
+from common.standardise import mean_and_scale
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
 
@@ -86,10 +87,8 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
         y_val = np.asarray(y_val, dtype=np.float64).reshape(len(X_val), -1)
 
         self.device_ = group.device(resolve_device(self.device))
-        self.feature_mean_ = X.mean(axis=0)
-        self.feature_scale_ = np.where(X.std(axis=0) > 0, X.std(axis=0), 1.0)
-        self.target_mean_ = y.mean(axis=0)
-        self.target_scale_ = np.where(y.std(axis=0) > 0, y.std(axis=0), 1.0)
+        self.feature_mean_, self.feature_scale_ = mean_and_scale(X)
+        self.target_mean_, self.target_scale_ = mean_and_scale(y)
         if not (np.isfinite(self.feature_scale_).all() and np.isfinite(self.target_scale_).all()):
             raise InputError("resmlp: inputs or targets are too large to standardise (overflow); rescale them")
         self.module_ = ResMLP(X.shape[1], y.shape[1], tuple(self.widths), tuple(self.dropouts),

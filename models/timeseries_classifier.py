@@ -44,6 +44,7 @@ from torch import nn
 from common.errors import InputError
 from common.progress import HEARTBEAT_S, on_terminal, progress
 from models.distributed import TrainingGroup, rank_seed
+from common.standardise import mean_and_scale
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
 log = logging.getLogger(__name__)
@@ -231,9 +232,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             raise InputError(f"time-series classifiers need windows of shape (n, channels, length), got {X.shape}")
         self._check_settings(len(X))
         n_classes = int(max(y.max(), np.max(y_val) if y_val is not None else 0)) + 1
-        self.channel_mean_ = X.astype(np.float64).mean(axis=(0, 2), keepdims=True)
-        spread = X.astype(np.float64).std(axis=(0, 2), keepdims=True)
-        self.channel_std_ = np.where(spread > 0, spread, 1.0)
+        self.channel_mean_, self.channel_std_ = mean_and_scale(X, axis=(0, 2), keepdims=True)
         X = self._scaled(X)
         self.classes_ = np.arange(n_classes)
         self.device_ = group.device(resolve_device(self.device))

@@ -26,6 +26,7 @@ from sklearn.preprocessing import StandardScaler
 
 from common.errors import InputError
 from common.progress import phase
+from common.standardise import constant_columns
 from data.preprocessing.features import compute_features, feature_names
 from data.readers.table_reader import MODEL_DTYPE, where
 from data.sensor_table import SensorTable, TableSource
@@ -132,6 +133,11 @@ class RegressionDataModule:
             raise InputError(f"{place}: channel readings {self.table.channels[row].tolist()} overflow the physics "
                              "features (products and powers of readings beyond float64's range)")
         scaler = StandardScaler().fit(features[self.train_idx])
+        # A feature constant on the training rows up to rounding (three channels' kurtosis) tells
+        # nothing, yet standardising its rounding noise would give the models values of order one
+        # that differ between the float64 pipeline and its float32 graph: an infinite scale maps
+        # it to exactly 0 in both.
+        scaler.scale_[constant_columns(features[self.train_idx])] = np.inf
         scaled = scaler.transform(features)
         with np.errstate(over="ignore"):
             bad = ~np.isfinite(scaled.astype(MODEL_DTYPE))
