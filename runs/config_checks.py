@@ -412,12 +412,29 @@ def check_path_key(cfg: DictConfig) -> None:
                          f"(data.path={value})")
 
 
+TIME_SERIES_DATA = ("data.datamodules.timeseries.TimeSeriesDataModule",
+                    "data.datamodules.recording_files.from_recordings_file")
+TABLE_ONLY_MODEL = "models.weighted_blend.ValidationWeightedBlend"
+
+
+def check_model_fits_data(cfg: DictConfig) -> None:
+    """The default model (the blend) learns from one row per press; recordings need a network
+    over windows. Said before composing the rest, whose first symptom would be a key the blend
+    reads from table data (data.n_folds)."""
+    data_target = OmegaConf.select(cfg, "data._target_", default=None)
+    model_target = OmegaConf.select(cfg, "model._target_", default=None)
+    if data_target in TIME_SERIES_DATA and model_target == TABLE_ONLY_MODEL:
+        raise InputError("model=blend (the default) learns from tables, one row per press; recordings train a "
+                         "time-series network: add model=prcnn (or rescnn, inceptiontime, lstm_fcn)")
+
+
 def check_config(cfg: DictConfig, overrides=()) -> list[str]:
     """Every check above on a composed config: raises InputError naming the first wrong setting
     (its key, its value and what it takes); returns one warning line when trainer settings among
     `overrides` reach nothing in this run (an empty list otherwise)."""
     run_config = OmegaConf.masked_copy(cfg, [key for key in cfg if key != "hydra"])
     check_path_key(run_config)
+    check_model_fits_data(run_config)
     try:
         missing = sorted(OmegaConf.missing_keys(run_config))
         if missing:

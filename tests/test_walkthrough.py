@@ -92,15 +92,28 @@ def recordings(n=30, steps=50, seed=0):
     return X, y
 
 
-@pytest.mark.parametrize("model", [[], ["model=prcnn"]], ids=["default_model", "prcnn"])
-def test_an_npz_of_recordings(tmp_path, model):
-    """`python train.py data=recordings_npz data.path=rig.npz` (the default model, and the
-    README's model=prcnn), then predict.py on the NPZ (one row per recording) and on the same
-    recordings as a long table with shuffled rows."""
+def save_recordings(tmp_path):
     X, y = recordings()
     np.savez(tmp_path / "rig.npz", X=X, y=y, channel_names=np.array(["press_v", "slip_v"]),
              sample_rate_hz=np.array(100.0))
-    run = train(tmp_path, "data=recordings_npz", "data.path=rig.npz", *model)
+    return X, y
+
+
+def test_an_npz_of_recordings_without_a_model_says_which_to_add(tmp_path):
+    """The default model regresses tables: on recordings the command says, in one line, what to add."""
+    save_recordings(tmp_path)
+    result = command("train.py", "data=recordings_npz", "data.path=rig.npz", f"hydra.run.dir={tmp_path / 'run'}",
+                     cwd=tmp_path)
+    assert result.returncode == 2 and result.stderr.count("\n") == 1 and "add model=prcnn" in result.stderr
+    assert not (tmp_path / "run").exists()
+
+
+def test_an_npz_of_recordings(tmp_path):
+    """`python train.py data=recordings_npz data.path=rig.npz model=prcnn` (the README's command),
+    then predict.py on the NPZ (one row per recording) and on the same recordings as a long table
+    with shuffled rows."""
+    X, y = save_recordings(tmp_path)
+    run = train(tmp_path, "data=recordings_npz", "data.path=rig.npz", "model=prcnn")
     predicted = predict(tmp_path, run, "rig.npz")
     assert predicted["recording"].tolist() == list(range(len(X))) and (predicted["start_step"] == 0).all()
     assert (predicted["predicted"] == y).mean() >= 0.8  # chance: 1/3
