@@ -2,14 +2,15 @@
 for ever: the study's budget counts them and its report would wait for them.
 
 Every trial records its job folder and worker (host, pid, process start; common/run_status.py)
-as the user attribute `job` (`trial_job`). Before each trial it asks for, a worker fails the RUNNING trials of workers
-that are gone from its own host, and re-queues each once per `lost_trial_retries` (Optuna's
-RetryHeartbeatStaleTrialCallback: the same parameters as a WAITING trial, which the next `ask`
-of any worker takes). That works on every storage and at once. A worker on another host cannot
-be checked that way: RDB storages (PostgreSQL) also keep Optuna's heartbeat, recorded for each
-running trial every `heartbeat_interval` seconds by `Heartbeat`, and Optuna's
-`fail_stale_trials` fails and re-queues a trial silent for twice that long. The journal file has
-no heartbeat: there a trial lost on another host waits until a worker starts on that host.
+as the user attribute `job` (`trial_job`). Before each trial it asks for, a worker fails the
+RUNNING trials of workers that are gone from its own host and re-queues each, up to
+`lost_trial_retries` times (Optuna's RetryHeartbeatStaleTrialCallback: the same parameters as a
+WAITING trial, which the next `ask` of any worker takes). That works on every storage and at
+once. A worker on another host cannot be checked that way: RDB storages (PostgreSQL) also keep
+Optuna's heartbeat, recorded for each running trial every `heartbeat_interval` seconds by
+`Heartbeat`, and Optuna's `fail_stale_trials` fails and re-queues a trial silent for twice that
+long. The journal file has no heartbeat: there a trial lost on another host waits until a worker
+starts on that host. A worker being stopped (SIGTERM, Ctrl-C) gives its trials back itself.
 """
 import threading
 import warnings
