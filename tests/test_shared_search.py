@@ -28,7 +28,7 @@ from hydra_plugins.touchstone_optuna_sweeper.lost_trials import (
 from hydra_plugins.touchstone_optuna_sweeper.study_budget import budget_left, counted, is_surplus, mark_surplus
 from hydra_plugins.touchstone_optuna_sweeper.study_report import study_results, write_study_report
 from hydra_plugins.touchstone_optuna_sweeper.study_storage import join_study, open_storage, shown, storage_location
-from hydra_plugins.touchstone_optuna_sweeper.trial_seeded_sampler import TrialSeededTPESampler
+from hydra_plugins.touchstone_optuna_sweeper.trial_seeded_sampler import TrialSeededTPESampler, trial_seed
 from runs.throwaway_postgres import missing, throwaway_postgres
 
 import slurm_support  # tests/slurm_support.py
@@ -82,6 +82,29 @@ def test_a_trials_random_stream_is_its_own(tmp_path):
     assert again == trials  # by trial number: the same stream and the same history
 
 
+def test_a_trials_parameters_are_drawn_from_one_reading_of_the_study(tmp_path):
+    """TPE with constant_liar reads the study again for every parameter (a round of SQL statements
+    each on PostgreSQL); the sampler reads it once per trial, however many parameters, and draws
+    exactly what TPE draws from that reading."""
+    wide = {f"p{i}": optuna.distributions.FloatDistribution(0.0, 1.0) for i in range(6)}
+    readings = {}
+    for name, space in (("narrow", SPACE), ("wide", wide)):
+        study = journal_study(tmp_path / f"{name}.log")
+        for _ in range(3):  # past the 2 random start-up trials: TPE models the study from here on
+            trial = study.ask(space)
+            study.tell(trial, sum(trial.params.values()))
+        calls, read = [], study._storage.get_all_trials
+        study._storage.get_all_trials = lambda *a, **k: calls.append(1) or read(*a, **k)
+        drawn = study.ask(space)
+        readings[name] = len(calls)
+    assert readings["wide"] == readings["narrow"]
+    study.tell(drawn, state=TrialState.FAIL)  # out of TPE's sight: the next trial sees trial 3's history
+    plain = optuna.load_study(study_name="s", storage=JournalStorage(JournalFileBackend(str(tmp_path / "wide.log"))),
+                              sampler=optuna.samplers.TPESampler(seed=trial_seed(0, 3), n_startup_trials=2,
+                                                                 constant_liar=True, multivariate=False))
+    assert plain.ask(wide).params == drawn.params  # TPE's own draw, from trial 3's seed and history
+
+
 def test_a_study_started_with_other_settings_is_refused(tmp_path):
     journal_study(tmp_path / "s.log", n_trials=4)
     with pytest.raises(InputError, match="n_trials differ"):
@@ -106,8 +129,8 @@ def test_a_trial_whose_worker_is_gone_is_failed_and_requeued_once(tmp_path):
     lost.set_user_attr(JOB, {**this_process(), "pid": gone.pid, "process_start": "another process",
                              "folder": str(tmp_path / "0"), "trial": lost.number})
     record_job(alive, str(tmp_path / "1"))  # this process: alive
-    assert fail_lost_trials(other, retry, heartbeats=False) == [lost.number]
-    assert fail_lost_trials(study, retry, heartbeats=False) == []  # once only
+    assert fail_lost_trials(other, other.get_trials(), retry, heartbeats=False) == [lost.number]
+    assert fail_lost_trials(study, study.get_trials(), retry, heartbeats=False) == []  # once only
     trials = study.get_trials()
     assert trials[lost.number].state == TrialState.FAIL and trials[alive.number].state == TrialState.RUNNING
     requeued = study.ask(SPACE)  # the next ask of any worker takes the re-queued copy
@@ -155,9 +178,11 @@ def test_a_trial_whose_heartbeat_stops_is_failed_and_requeued(tmp_path):
     with pytest.warns(UserWarning, match="Heartbeat"):  # Optuna expects study.optimize(); the sweeper asks
         trial = study.ask(SPACE)
     with Heartbeat(storage, [trial], interval=1):
-        assert fail_lost_trials(study, retry, heartbeats=True) == []  # beating
-    time.sleep(2.5)  # silent for longer than the grace period (2 intervals)
-    assert fail_lost_trials(study, retry, heartbeats=True) == [trial.number]
+        assert fail_lost_trials(study, study.get_trials(), retry, heartbeats=True) == []  # beating
+    # silent for longer than the grace period (2 intervals); SQLite's clock counts whole seconds, so
+    # 2.5 s could read as 2 (not stale); 3.5 s reads as at least 3
+    time.sleep(3.5)
+    assert fail_lost_trials(study, study.get_trials(), retry, heartbeats=True) == [trial.number]
     trials = study.get_trials()
     assert trials[1].state == TrialState.WAITING and trials[1].params == trial.params
 

@@ -59,11 +59,12 @@ def fail_and_requeue(study: optuna.Study, trial_number: int, retry) -> bool:
     return True
 
 
-def fail_lost_trials(study: optuna.Study, retry, heartbeats: bool) -> list[int]:
-    """Fail and re-queue the trials lost by gone workers (and, with `heartbeats`, the trials whose
-    heartbeat went stale); returns their numbers."""
-    failed = [trial.number for trial in study.get_trials(deepcopy=False, states=(TrialState.RUNNING,))
-              if lost_by_a_gone_worker(trial) and fail_and_requeue(study, trial.number, retry)]
+def fail_lost_trials(study: optuna.Study, trials: list[optuna.trial.FrozenTrial], retry,
+                     heartbeats: bool) -> list[int]:
+    """Fail and re-queue the trials lost by gone workers among `trials` (the study's, as just read)
+    and, with `heartbeats`, the trials whose heartbeat went stale; returns their numbers."""
+    failed = [trial.number for trial in trials if trial.state == TrialState.RUNNING
+              and lost_by_a_gone_worker(trial) and fail_and_requeue(study, trial.number, retry)]
     if heartbeats:
         with warnings.catch_warnings():  # fail_stale_trials is "experimental"
             warnings.simplefilter("ignore", optuna.exceptions.ExperimentalWarning)

@@ -119,18 +119,24 @@ class OptunaTPESweeper(Sweeper):
         OmegaConf.save(self.config, sweep_dir / "multirun.yaml")
         log.info("Optuna TPE search: study %r (%s), %d trials in the study over %s; this worker's jobs in %s",
                  study.study_name, shown(location), self.n_trials, ", ".join(space), sweep_dir)
-        # storage_s: time spent on the study between jobs (lost-trial check, ask and sampling, records,
-        # tell), the storage's overhead per trial in optimization_results.yaml
+        # storage_s: time spent on the study between jobs (tell, lost-trial check, ask and sampling,
+        # records), the storage's overhead per trial in optimization_results.yaml; it runs from a
+        # batch's tell to the next batch's launch
         returns, ran, storage_s = [], 0, 0.0
         stale_checked = -math.inf  # heartbeats go stale in minutes: look for stale trials once an interval
+        started = time.perf_counter()
+        # The study's trials, read once per round: after a batch's tell they give its progress line,
+        # then the next round's lost-trial and budget checks, which follow at once (each reading is
+        # a round of SQL statements on an RDB storage)
+        study_trials = study.get_trials(deepcopy=False)
         while True:
-            started = time.perf_counter()
             check_stale = has_heartbeat(storage) and started - stale_checked >= self.heartbeat_interval
             stale_checked = started if check_stale else stale_checked
-            for number in fail_lost_trials(study, self.retry_lost, check_stale):
+            lost = fail_lost_trials(study, study_trials, self.retry_lost, check_stale)
+            for number in lost:
                 log.warning("trial %d: its worker is gone (killed?); marked failed%s", number,
                             ", re-queued" if self.lost_trial_retries else "")
-            trials = self._ask(study, space, sweep_dir)
+            trials = self._ask(study, space, sweep_dir, study.get_trials(deepcopy=False) if lost else study_trials)
             storage_s += time.perf_counter() - started
             if not trials:
                 break
@@ -144,13 +150,17 @@ class OptunaTPESweeper(Sweeper):
             except BaseException:
                 give_back(study, trials, self.retry_lost)
                 raise
-            started = time.perf_counter()
-            for trial, result in zip(trials, results):
-                self._tell(study, trial, result)
-            storage_s += time.perf_counter() - started
+            started = time.perf_counter()  # counted at the next launch, with that round's checks and ask
+            values = [self._tell(study, trial, result) for trial, result in zip(trials, results)]
+            study_trials = study.get_trials(deepcopy=False)
+            counts = progress(study_trials)
+            for trial, value in zip(trials, values):
+                log.info("trial %d: %s -> %s (study %r: %d of %d trials taken, %d complete, %d failed, %d running)",
+                         trial.number, trial.params, value, study.study_name, counts["counted"], self.n_trials,
+                         counts["complete"], counts["failed"], counts["running"])
             ran += len(trials)
             returns.append(results)
-        fail_lost_trials(study, self.retry_lost, has_heartbeat(storage))
+        fail_lost_trials(study, study.get_trials(deepcopy=False), self.retry_lost, has_heartbeat(storage))
         self._report(study, fixed, location, sweep_dir, ran, storage_s)
         return returns
 
@@ -178,10 +188,13 @@ class OptunaTPESweeper(Sweeper):
                            self.direction, definition)
         return fixed, space, study, storage, location
 
-    def _ask(self, study: optuna.Study, space: dict, sweep_dir: Path) -> list[optuna.Trial]:
-        """Up to n_jobs trials while the study's budget lasts, each marked with its job folder and worker."""
+    def _ask(self, study: optuna.Study, space: dict, sweep_dir: Path,
+             study_trials: list[optuna.trial.FrozenTrial]) -> list[optuna.Trial]:
+        """Up to n_jobs trials while the study's budget lasts, each marked with its job folder and
+        worker. `study_trials`: the study's trials as just read; after a first ask, read again."""
         trials = []
-        while len(trials) < self.n_jobs and budget_left(study.get_trials(deepcopy=False), self.n_trials):
+        while len(trials) < self.n_jobs and budget_left(
+                study.get_trials(deepcopy=False) if trials else study_trials, self.n_trials):
             with warnings.catch_warnings():  # Optuna warns that its heartbeat expects study.optimize()
                 warnings.simplefilter("ignore", UserWarning)
                 trial = study.ask(space)
@@ -193,7 +206,8 @@ class OptunaTPESweeper(Sweeper):
             trials.append(trial)
         return trials
 
-    def _tell(self, study: optuna.Study, trial: optuna.Trial, result) -> None:
+    def _tell(self, study: optuna.Study, trial: optuna.Trial, result) -> float:
+        """Record the job's result on its trial; returns the value (NaN: failed)."""
         try:
             value = float(result.return_value)
         except Exception as error:  # noqa: BLE001 - any job failure is recorded as a failed trial
@@ -207,10 +221,7 @@ class OptunaTPESweeper(Sweeper):
         except (RuntimeError, ValueError) as error:  # UpdateFinishedTrialError: another worker failed it
             log.warning("trial %d: not recorded, another worker marked it failed while it ran (%s)", trial.number,
                         str(error).splitlines()[0])
-        counts = progress(study.get_trials(deepcopy=False))
-        log.info("trial %d: %s -> %s (study %r: %d of %d trials taken, %d complete, %d failed, %d running)",
-                 trial.number, trial.params, value, study.study_name, counts["counted"], self.n_trials,
-                 counts["complete"], counts["failed"], counts["running"])
+        return value
 
     def _report(self, study: optuna.Study, fixed: list[str], location: str, sweep_dir: Path, ran: int,
                 storage_s: float) -> None:
