@@ -56,8 +56,13 @@ def write_classification_report(result, output_dir, logger) -> None:
     write_figures(output_dir, figures, logger)
     save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
     val, test = metrics["val"], metrics["test"]
-    log.info("%s (%d parameters) fitted in %.1f s: validation accuracy %.4f (macro-F1 %.4f, loss %.4f, by level %s); "
-             "test accuracy %.4f (macro-F1 %.4f, loss %.4f, by level %s)",
+    log.info("%s (%d parameters) fitted in %.1f s: validation accuracy %.4f (macro-F1 %.4f, loss %.4f%s); "
+             "test accuracy %.4f (macro-F1 %.4f, loss %.4f%s)",
              metrics["model"], metrics["n_parameters"], metrics["fit_time_s"], val["accuracy"], val["macro_f1"],
-             val["loss"], val.get("accuracy_by_force_level_n"), test["accuracy"], test["macro_f1"], test["loss"],
-             test.get("accuracy_by_force_level_n"))
+             val["loss"], by_force_level(val), test["accuracy"], test["macro_f1"], test["loss"], by_force_level(test))
+
+
+def by_force_level(split: dict) -> str:
+    """', by level {...}' where the data has force levels (recordings pressed at known forces), else nothing."""
+    levels = split.get("accuracy_by_force_level_n")
+    return "" if levels is None else f", by level {levels}"
