@@ -4,6 +4,7 @@ two-worker studies, some with a worker SIGKILLed mid-trial, counting lost and du
 
     .venv/bin/python bench/search_scaling.py                          # ~30 min on 2 cores
     .venv/bin/python bench/search_scaling.py --repeats 1 --kill-runs 4  # a quick look
+    .venv/bin/python bench/search_scaling.py --storages postgresql --workers 1 2 --kill-runs 0
 
 Every worker is a real `python train.py -m hparams_search=resmlp_optuna` process (threads=1, the
 default) with tiny trials (120 presses, 3 epochs), all on one study of `--trials` trials.
@@ -12,8 +13,10 @@ over the time from its first trial's end to its last one's (a worker's start-up 
 trial's imports, ~5 s of CPU per process, are a fixed cost per process, outside it; the gaps
 between trials, where the storage works, are inside). Overhead: the time each
 worker's sweeper spends on the study between its jobs (lost-trial check, ask and TPE sampling,
-records, tell; `storage_ms_per_trial` in its optimization_results.yaml), averaged over workers. PostgreSQL: a throwaway server per study
-(runs/throwaway_postgres.py), so every study also meets the schema race of an empty database.
+records, tell; `storage_ms_per_trial` in its optimization_results.yaml), averaged over workers.
+PostgreSQL: a throwaway server per study (runs/throwaway_postgres.py) with the server's default
+durability (every commit flushed to disk, as on a real server), so every study also meets the
+schema race of an empty database.
 Lost: a counted trial that did not complete; duplicated: a trial number, job folder or
 parameter set run twice (a re-queued trial aside).
 """
@@ -88,7 +91,8 @@ def storage_object(storage: str):
 def one_study(engine: str, workers: int, n_trials: int, kill: bool = False) -> dict:
     with tempfile.TemporaryDirectory(prefix="search-scaling-") as tmp:
         folder = Path(tmp)
-        with (throwaway_postgres() if engine == "postgresql" else nullcontext(str(folder / "study.log"))) as storage:
+        server = throwaway_postgres(durable=True) if engine == "postgresql" else nullcontext(str(folder / "study.log"))
+        with server as storage:
             return study_run(folder, storage, workers, n_trials, kill)
 
 
@@ -98,9 +102,10 @@ def main() -> None:
     parser.add_argument("--trials", type=int, default=24, help="trials per study")
     parser.add_argument("--workers", type=int, nargs="+", default=[1, 2, 4])
     parser.add_argument("--kill-runs", type=int, default=20, help="two-worker studies, every other one with a kill")
+    parser.add_argument("--storages", nargs="+", choices=["journal", "postgresql"], default=["journal", "postgresql"])
     args = parser.parse_args()
-    engines = ["journal"] + (["postgresql"] if missing() is None else [])
-    if missing():
+    engines = [e for e in args.storages if e == "journal" or missing() is None]
+    if "postgresql" in args.storages and missing():
         print(f"PostgreSQL skipped: {missing()}")
     print(f"{os.cpu_count()} cores; {args.trials} trials per study; load average: the 1-minute figure before and after")
     print("| storage | workers | trials/min | speed-up vs 1 worker | storage overhead (ms/trial) | load average |")

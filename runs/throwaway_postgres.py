@@ -37,8 +37,10 @@ def missing() -> str | None:
 
 
 @contextmanager
-def throwaway_postgres():
-    """Yields the SQLAlchemy URL of a fresh, empty server (database `postgres`)."""
+def throwaway_postgres(durable: bool = False):
+    """Yields the SQLAlchemy URL of a fresh, empty server (database `postgres`). Not `durable`
+    (tests): fsync off, as nothing outlives the test; `durable` (measurements): the server's
+    default durability, every commit flushed to disk as on a real database server."""
     binaries = server_binaries()
     as_root = os.geteuid() == 0
     user = "postgres" if as_root else os.environ.get("USER") or Path.home().name
@@ -58,7 +60,7 @@ def throwaway_postgres():
     try:
         run("initdb", "-A", "trust", "--no-sync", "-U", user, "-D", str(data))
         run("pg_ctl", "-D", str(data), "-l", str(folder / "server.log"), "-w",
-            "-o", f"-k {socket_dir} -p {port} -c listen_addresses='' -c fsync=off", "start")
+            "-o", f"-k {socket_dir} -p {port} -c listen_addresses=''" + ("" if durable else " -c fsync=off"), "start")
         try:
             yield f"postgresql+psycopg2://{user}@/postgres?host={socket_dir}&port={port}"
         finally:

@@ -84,20 +84,28 @@ def test_a_trials_random_stream_is_its_own(tmp_path):
 
 def test_a_trials_parameters_are_drawn_from_one_reading_of_the_study(tmp_path):
     """TPE with constant_liar reads the study again for every parameter (a round of SQL statements
-    each on PostgreSQL); the sampler reads it once per trial, however many parameters, and draws
-    exactly what TPE draws from that reading."""
+    each on PostgreSQL); the sampler reads it once per trial, however many parameters, or not at
+    all when handed the sweeper's reading, and draws exactly what TPE draws from that reading."""
     wide = {f"p{i}": optuna.distributions.FloatDistribution(0.0, 1.0) for i in range(6)}
-    readings = {}
-    for name, space in (("narrow", SPACE), ("wide", wide)):
+
+    def modelled(name: str, space: dict) -> optuna.Study:  # past the 2 random start-up trials: TPE from here on
         study = journal_study(tmp_path / f"{name}.log")
-        for _ in range(3):  # past the 2 random start-up trials: TPE models the study from here on
+        for _ in range(3):
             trial = study.ask(space)
             study.tell(trial, sum(trial.params.values()))
+        return study
+
+    readings = {}
+    for name, space in (("narrow", SPACE), ("wide", wide)):
+        study = modelled(name, space)
         calls, read = [], study._storage.get_all_trials
         study._storage.get_all_trials = lambda *a, **k: calls.append(1) or read(*a, **k)
         drawn = study.ask(space)
         readings[name] = len(calls)
     assert readings["wide"] == readings["narrow"]
+    handed = modelled("handed", wide)
+    handed.sampler.draw_next_from(handed.get_trials(deepcopy=False))  # as the sweeper hands its budget check's
+    assert handed.ask(wide).params == drawn.params
     study.tell(drawn, state=TrialState.FAIL)  # out of TPE's sight: the next trial sees trial 3's history
     plain = optuna.load_study(study_name="s", storage=JournalStorage(JournalFileBackend(str(tmp_path / "wide.log"))),
                               sampler=optuna.samplers.TPESampler(seed=trial_seed(0, 3), n_startup_trials=2,

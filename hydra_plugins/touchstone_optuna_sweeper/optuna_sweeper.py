@@ -191,10 +191,14 @@ class OptunaTPESweeper(Sweeper):
     def _ask(self, study: optuna.Study, space: dict, sweep_dir: Path,
              study_trials: list[optuna.trial.FrozenTrial]) -> list[optuna.Trial]:
         """Up to n_jobs trials while the study's budget lasts, each marked with its job folder and
-        worker. `study_trials`: the study's trials as just read; after a first ask, read again."""
+        worker. `study_trials`: the study's trials as just read, for the budget check and the
+        sampler; after a first ask, read again."""
         trials = []
-        while len(trials) < self.n_jobs and budget_left(
-                study.get_trials(deepcopy=False) if trials else study_trials, self.n_trials):
+        while len(trials) < self.n_jobs:
+            reading = study.get_trials(deepcopy=False) if trials else study_trials
+            if not budget_left(reading, self.n_trials):
+                break
+            study.sampler.draw_next_from(reading)
             with warnings.catch_warnings():  # Optuna warns that its heartbeat expects study.optimize()
                 warnings.simplefilter("ignore", UserWarning)
                 trial = study.ask(space)
@@ -213,11 +217,14 @@ class OptunaTPESweeper(Sweeper):
         except Exception as error:  # noqa: BLE001 - any job failure is recorded as a failed trial
             log.warning("trial %d failed: %s", trial.number, str(error).splitlines()[0] if str(error) else error)
             value = math.nan
+        # Study.tell less its last step, a re-read of the told trial to return it (6 SQL statements on
+        # PostgreSQL); Optuna-internal, so imported here: were it renamed, searches fail, not every run
+        from optuna.study._tell import _tell_with_warning
         try:
             if math.isfinite(value):
-                study.tell(trial, value)
+                _tell_with_warning(study, trial, value)
             else:
-                study.tell(trial, state=optuna.trial.TrialState.FAIL)
+                _tell_with_warning(study, trial, state=optuna.trial.TrialState.FAIL)
         except (RuntimeError, ValueError) as error:  # UpdateFinishedTrialError: another worker failed it
             log.warning("trial %d: not recorded, another worker marked it failed while it ran (%s)", trial.number,
                         str(error).splitlines()[0])

@@ -9,10 +9,12 @@ it treats trials running in other workers as bad ones, so concurrent workers spr
 (Optuna's recommendation for distributed TPE; with one worker and n_jobs=1 nothing else runs,
 so it changes nothing there).
 
-A trial's parameters are all drawn from one reading of the study's trials, taken when the trial
-starts: TPE with `constant_liar` reads the study again for every parameter, each reading a round
-of SQL statements on an RDB storage (about 7 on PostgreSQL), though the parameters of one trial
-are drawn milliseconds apart.
+A trial's parameters are all drawn from one reading of the study's trials: the one its worker
+took just before asking for it (`draw_next_from`; the sweeper's budget check), or else one taken
+when the trial starts. TPE with `constant_liar` reads the study again for every parameter, each
+reading a round of SQL statements on an RDB storage (about 7 on PostgreSQL), though the
+parameters of one trial are drawn milliseconds apart; the trial itself, missing from a reading
+taken before it, is one TPE leaves out anyway.
 """
 import copy
 
@@ -29,8 +31,8 @@ class StudyAtTrialStart:
     """The study as TPE sees it while it draws one trial's parameters: its trials as read once
     when the trial started, everything else the study's own."""
 
-    def __init__(self, study: optuna.Study) -> None:
-        self._study, self._trials = study, study.get_trials(deepcopy=False)
+    def __init__(self, study: optuna.Study, trials: list[optuna.trial.FrozenTrial]) -> None:
+        self._study, self._trials = study, trials
 
     def __getattr__(self, name: str):
         return getattr(self._study, name)
@@ -46,16 +48,21 @@ class StudyAtTrialStart:
 class TrialSeededTPESampler(optuna.samplers.BaseSampler):
     def __init__(self, seed: int, n_startup_trials: int) -> None:
         self.seed, self.n_startup_trials = seed, n_startup_trials
-        self._trial_number, self._tpe, self._study = None, None, None
+        self._trial_number, self._tpe, self._study, self._reading = None, None, None, None
+
+    def draw_next_from(self, trials: list[optuna.trial.FrozenTrial]) -> None:
+        """The study's trials as just read: the next trial to start draws its parameters from them."""
+        self._reading = trials
 
     def before_trial(self, study, trial) -> None:
         self._start(study, trial.number)
 
     def _start(self, study, trial_number: int) -> None:
+        reading, self._reading = self._reading, None
         self._trial_number = trial_number
         self._tpe = optuna.samplers.TPESampler(seed=trial_seed(self.seed, trial_number),
                                                n_startup_trials=self.n_startup_trials, constant_liar=True)
-        self._study = StudyAtTrialStart(study)
+        self._study = StudyAtTrialStart(study, study.get_trials(deepcopy=False) if reading is None else reading)
 
     def infer_relative_search_space(self, study, trial) -> dict:
         return {}  # independent TPE: every parameter is drawn on its own
