@@ -23,9 +23,9 @@ chosen so that N processes compute what one process computes with the same globa
 """
 import atexit
 import os
-import pickle
 import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import torch
@@ -36,6 +36,7 @@ from torch import nn
 from torch.nn.parallel import DistributedDataParallel
 
 from common.distributed import export_submitit_environment, launched_local_rank, launched_world_size
+from models.fitted_state import load_fitted, save_fitted
 
 
 def join_process_group() -> bool:
@@ -203,32 +204,26 @@ def fit_in_processes(estimator, n_processes: int, *fit_args, threads: int = 1, *
     `torchrun --standalone --nproc_per_node=n_processes` would run it; one process: alone, in a
     child all the same) and return rank 0's fitted estimator, with `fit_wall_s_`, the wall time of
     its fit: what the tests and bench/ddp_step_time.py compare with a one-process fit."""
-    context = multiprocessing.get_context("fork")  # the children start with this process's imports
-    results = context.SimpleQueue()
     with tempfile.TemporaryDirectory() as folder:
-        children = multiprocessing.start_processes(
-            _fit_rank, args=(n_processes, f"file://{folder}/rendezvous", threads, estimator, fit_args, fit_kwargs,
-                             results), nprocs=n_processes, start_method="fork", join=False)
-        fitted = None
-        while True:  # read while rank 0 writes (a large estimator fills the pipe), until all have ended
-            if fitted is None and not results.empty():
-                fitted = results.get()
-            if children.join(timeout=0.1):  # raises when a child failed
-                break
-    return pickle.loads(fitted if fitted is not None else results.get())  # our own child's bytes, never a user's file
+        # rank 0 hands its fit back in the fitted-state format every run's pipeline.npz uses (no
+        # pickle: nothing on disk here can run code when read), after every child has ended
+        multiprocessing.start_processes(
+            _fit_rank, args=(n_processes, folder, threads, estimator, fit_args, fit_kwargs),
+            nprocs=n_processes, start_method="fork", join=True)  # raises when a child failed
+        return load_fitted(Path(folder) / "rank0.npz")
 
 
-def _fit_rank(rank, n_processes, rendezvous, threads, estimator, fit_args, fit_kwargs, results):
+def _fit_rank(rank, n_processes, folder, threads, estimator, fit_args, fit_kwargs):
     torch.set_num_threads(threads)
     if n_processes > 1:
         os.environ.update(RANK=str(rank), WORLD_SIZE=str(n_processes), LOCAL_RANK=str(rank))
-        dist.init_process_group("gloo", init_method=rendezvous, rank=rank, world_size=n_processes)
+        dist.init_process_group("gloo", init_method=f"file://{folder}/rendezvous", rank=rank, world_size=n_processes)
     try:
         start = time.perf_counter()
         fitted = clone(estimator).fit(*fit_args, **fit_kwargs)
         fitted.fit_wall_s_ = time.perf_counter() - start
         if rank == 0:
-            results.put(pickle.dumps(fitted))  # by value: torch's shared-memory tensors die with the child
+            save_fitted(fitted, Path(folder) / "rank0.npz")
     finally:
         if dist.is_initialized():
             dist.destroy_process_group()
