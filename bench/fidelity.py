@@ -1,18 +1,21 @@
-"""Fidelity table: what each paper observed on its sensor, measured on the scene.
+"""Fidelity tables: what each paper observed on its sensor, measured on the scene that stands in for it.
 
-    .venv/bin/python bench/fidelity.py                    # rubber12, markdown table
+    .venv/bin/python bench/fidelity.py --scene all --out /tmp/fidelity.md   # all five scenes, held / total
+    .venv/bin/python bench/fidelity.py                    # rubber12 only (any --scene NAME)
     .venv/bin/python bench/fidelity.py --json             # the same rows as JSON
     .venv/bin/python bench/fidelity.py --scene rubber12 --config rubber12_lab --repeats 50
-    .venv/bin/python bench/fidelity.py scene.measurement=opposite     # any Hydra override
-    .venv/bin/python bench/fidelity.py --patterns          # which readout reproduces the sensitivity map
-    .venv/bin/python bench/fidelity.py --scene fingertip --repeats 15   # Zhang et al. 2022's observations + Algorithm 1's diagnostic
+    .venv/bin/python bench/fidelity.py scene.measurement=opposite     # any Hydra override (one scene)
+    .venv/bin/python bench/fidelity.py --patterns          # which rubber12 readout reproduces the sensitivity map
+    .venv/bin/python bench/fidelity.py --scene fingertip --repeats 15   # + Algorithm 1's diagnostic
 
-The observations are the papers' (docs/fidelity.md lists them); one check per
-observation lives in runs/fidelity/rubber12.py, which says how each is measured and judged.
-The scene is the composed Hydra config `scene=<config>` (default: the scene's default config).
+The observations are the papers' (../shared/notes/seed-observations.md, docs/fidelity.md); one
+check per observation lives in runs/fidelity/<scene>.py, which says how each is measured and
+judged; a scene whose module is not there yet prints one line saying so. The scene is the
+composed Hydra config `scene=<config>` (default: runs/fidelity/observations.py's CONFIGS).
 """
 import argparse
 import json
+import os
 import sys
 import time
 from dataclasses import asdict
@@ -25,7 +28,8 @@ import numpy as np  # noqa: E402
 from sklearn.ensemble import ExtraTreesRegressor  # noqa: E402
 from sklearn.metrics import r2_score  # noqa: E402
 
-from runs.fidelity.observations import CHECKS, markdown, run_checks, scene_params  # noqa: E402
+from runs.fidelity.observations import (  # noqa: E402
+    CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, run_checks, scene_params)
 from runs.fidelity.rubber12 import (  # noqa: E402
     CORNERS,
     SceneProbe,
@@ -35,14 +39,8 @@ from runs.fidelity.rubber12 import (  # noqa: E402
     extra_trees_r2,
     mirror_ambiguity_worst_at_edges,
 )
-from runs.fidelity.fingertip import (  # noqa: E402
-    FingertipProbe,
-    algorithm1_diagnostic,
-    diagnostic_markdown,
-)
+from runs.fidelity.fingertip import algorithm1_diagnostic, diagnostic_markdown  # noqa: E402
 from data.preprocessing.features import FEATURE_GROUPS, compute_features  # noqa: E402
-
-PROBES = {"rubber12": SceneProbe, "fingertip": FingertipProbe}
 
 # rubber12 readout patterns compared by --patterns: named ones and electrode e_i against e_i+k.
 PATTERNS = {"adjacent": "adjacent", "i vs i+3": [[i, (i + 2) % 12 + 1] for i in range(1, 13)],
@@ -93,34 +91,57 @@ def _mean_corners(probe) -> float:
     return float(_sensitivity_per_mm(probe)[CORNERS].mean())
 
 
+def scene_section(scene: str, args, overrides) -> tuple[str, int, int, int]:
+    """One scene's markdown section, and its rows held / measured / total."""
+    start = time.perf_counter()
+    if not load_scene(scene):
+        return (f"## {scene}\n\nnot measured: {SCENE_MODULES[scene].replace('.', '/')}.py is not written yet\n",
+                0, 0, 0)
+    config = args.config or CONFIGS[scene]
+    probe = make_probe(scene, overrides, args.repeats, config)
+    rows = run_checks(scene, probe)
+    held = sum(row.measured.holds is True for row in rows)
+    measured = sum(row.measured.holds is not None for row in rows)
+    text = (f"## {scene}\n\n`scene={config}`: {held} of {len(rows)} rows hold ({measured} measured; "
+            f"{time.perf_counter() - start:.0f} s)\n\n{markdown(rows)}\n")
+    if scene == "fingertip":
+        text += "\n### Algorithm 1's cubic at the unseen levels (materials10)\n\n"
+        text += diagnostic_markdown(algorithm1_diagnostic(probe)) + "\n"
+    return text, held, measured, len(rows)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--scene", default="rubber12", choices=[s for s in CHECKS if s in PROBES])
-    parser.add_argument("--config", default=None, help="scene config to compose (default: --scene)")
+    parser.add_argument("--scene", default="rubber12", choices=[*CHECKS, "all"])
+    parser.add_argument("--config", default=None, help="scene config to compose (default: the scene's own)")
     parser.add_argument("--repeats", type=int, default=20, help="identical presses per point for noise figures")
     parser.add_argument("--json", action="store_true")
+    parser.add_argument("--out", type=Path, help="also write the markdown to this file")
     parser.add_argument("--patterns", action="store_true", help="rubber12: compare readout patterns instead")
     parser.add_argument("overrides", nargs="*", help="Hydra overrides, e.g. scene.measurement=opposite")
     args = parser.parse_args(argv)
+    if args.scene == "all" and (args.config or args.overrides):
+        parser.error("--config and Hydra overrides apply to one scene; pick it with --scene")
 
-    config = args.config or args.scene
-    start = time.perf_counter()
     if args.patterns:
-        print(compare_patterns(config, args.overrides, args.repeats))
+        print(compare_patterns(args.config or "rubber12", args.overrides, args.repeats))
         return
-    rows = run_checks(args.scene, PROBES[args.scene](scene_params(config, args.overrides), repeats=args.repeats))
     if args.json:
-        print(json.dumps([asdict(row) for row in rows], indent=1))
+        load_scene(args.scene)
+        rows = run_checks(args.scene, make_probe(args.scene, args.overrides, args.repeats, args.config))
+        print(json.dumps([asdict(row) for row in rows], indent=1, default=float))
         return
-    held = sum(row.measured.holds is True for row in rows)
-    measured = sum(row.measured.holds is not None for row in rows)
-    print(f"## {args.scene} (scene={config}; {held} of {measured} measured rows hold; "
-          f"{time.perf_counter() - start:.1f} s)\n")
-    print(markdown(rows))
-    if args.scene == "fingertip":
-        probe = PROBES[args.scene](scene_params(config, args.overrides), repeats=args.repeats)
-        print("\n### Algorithm 1's cubic at the unseen levels (materials10)\n")
-        print(diagnostic_markdown(algorithm1_diagnostic(probe)))
+    sections, totals = [], np.zeros(3, dtype=int)
+    for scene in (CHECKS if args.scene == "all" else [args.scene]):
+        text, *counts = scene_section(scene, args, args.overrides)
+        print(text, flush=True)
+        sections.append(text)
+        totals += counts
+    summary = (f"**{totals[0]} of {totals[2]} rows hold over {len(sections)} scene(s)** "
+               f"({totals[1]} measured; load average {os.getloadavg()[0]:.2f})")
+    print(summary)
+    if args.out:
+        args.out.write_text("\n".join(sections) + "\n" + summary + "\n")
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ from data.preprocessing.virtual_force_levels import fit_cubic, window_features
 from data.preprocessing.windows import cut_windows, decimate
 from data.scenes.fingertip import FingertipScene
 from data.scenes.fingertip_boards import BOARD_SETS
-from runs.fidelity.observations import Measured, observation
+from runs.fidelity.observations import Measured, observation, probe
 
 ROOT = Path(__file__).resolve().parents[2]
 PAPER_COMBINED18 = ([(m, t) for m in ("silk", "paper") for t in ("flat", "circular_4mm", "circular_6mm",
@@ -42,6 +42,7 @@ def data_settings() -> dict:
     return OmegaConf.to_container(OmegaConf.load(ROOT / "configs/data/fingertip.yaml"))
 
 
+@probe("fingertip")
 class FingertipProbe:
     """Recordings of one fingertip configuration (`params`: the composed scene config as a dict),
     cut into the experiments' windows. `repeats` = passes per force level (the paper: 15)."""

@@ -1,7 +1,14 @@
 """The fidelity table's parts: observations registered per scene, what a measurement returns,
 and the table. One check function per observation in ../shared/notes/seed-observations.md,
 registered with `@observation(scene, number, statement, paper)` in `CHECKS[scene]`; each returns
-a `Measured`. bench/fidelity.py prints the table; the tests assert every row that holds."""
+a `Measured`. bench/fidelity.py prints the table; the tests assert every row that holds.
+
+Each scene's checks live in their own module (`SCENE_MODULES`); `load_scene` imports it, so a
+scene whose module is not written yet is reported as such instead of failing the others. A
+check gets a probe: the class the module registers with `@probe(scene)`, or else `SceneConfig`
+(the composed scene config as a dict, `params`, and `repeats`), built from the scene's config
+`CONFIGS[scene]` plus any Hydra overrides."""
+import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -9,7 +16,14 @@ from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
 ROOT = Path(__file__).resolve().parents[2]
-CHECKS: dict[str, list] = {"rubber12": [], "fingertip": []}
+# seed 000, 003, 001, 002, 004 (../shared/notes/seed-observations.md)
+CHECKS: dict[str, list] = {"rubber12": [], "fingertip": [], "capacitive6x6": [], "ert": [], "taxels": []}
+SCENE_MODULES = {"rubber12": "runs.fidelity.rubber12", "fingertip": "runs.fidelity.fingertip",
+                 "capacitive6x6": "runs.fidelity.capacitive6x6", "ert": "runs.fidelity.ert",
+                 "taxels": "runs.fidelity.taxels"}
+CONFIGS = {"rubber12": "rubber12", "fingertip": "fingertip", "capacitive6x6": "capacitive6x6",
+           "ert": "ert_internal", "taxels": "taxels"}
+PROBES: dict[str, type] = {}
 
 
 @dataclass
@@ -33,9 +47,41 @@ def observation(scene: str, number: str, statement: str, paper: str = "—"):
     """Register a check function as the measurement of one observation of `scene`'s paper."""
     def register(fn):
         fn.observation = (scene, number, statement, paper)
-        CHECKS[scene].append(fn)
+        CHECKS.setdefault(scene, []).append(fn)
         return fn
     return register
+
+
+def probe(scene: str):
+    """Register the class whose instances `(params, repeats=...)` the checks of `scene` get."""
+    def register(cls):
+        PROBES[scene] = cls
+        return cls
+    return register
+
+
+class SceneConfig:
+    """The probe of a scene whose module registers none: its composed config and a sample size."""
+
+    def __init__(self, params: dict, repeats: int = 20):
+        self.params = {k: v for k, v in params.items() if k not in ("_target_", "_convert_")}
+        self.repeats = repeats
+
+
+def load_scene(scene: str) -> bool:
+    """Import the module holding `scene`'s checks; False when it does not exist yet."""
+    name = SCENE_MODULES[scene]
+    try:
+        importlib.import_module(name)
+    except ModuleNotFoundError as error:
+        if error.name != name:      # the module exists but something it imports does not
+            raise
+        return False
+    return True
+
+
+def make_probe(scene: str, overrides=(), repeats: int = 20, config: str | None = None):
+    return PROBES.get(scene, SceneConfig)(scene_params(config or CONFIGS[scene], overrides), repeats=repeats)
 
 
 def run_checks(scene: str, probe) -> list[Row]:

@@ -20,10 +20,11 @@ import numpy as np
 from data.preprocessing.features import FEATURE_GROUPS, compute_features
 from data.scenes.rubber12 import Rubber12Scene
 from data.scenes.rubber12_effects import FIELD_EFFECTS
-from runs.fidelity.observations import Measured, observation
+from runs.fidelity.observations import Measured, observation, probe
 
 
 # -- rubber12 ------------------------------------------------------------------------------------
+@probe("rubber12")
 class SceneProbe:
     """Presses on one rubber12 configuration (`params`: the composed scene config as a dict).
 
