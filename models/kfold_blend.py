@@ -9,6 +9,11 @@ Classifiers average probabilities.
 The held-out fold is never shown to its fold model: a net carves its early-stopping rows from
 its own K - 1 folds (grouped when groups are given), so the out-of-fold predictions that feed
 sigma_data and the stacking weights come from rows the model neither trained nor stopped on.
+
+`resample="seeds"` makes the same K members a seed ensemble instead: each is trained on every
+training row with its own seed (the comparison docs/pipeline.md reports: K-fold blending against
+one model on all rows and against a seed ensemble). It has no out-of-fold predictions; sigma_data
+then comes from the validation rows when given, else from the training residuals.
 """
 import logging
 import time
@@ -18,20 +23,23 @@ from sklearn.base import BaseEstimator, RegressorMixin, clone
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted, validate_data
 
+from common.errors import InputError
 from common.progress import progress
 from data.splits.indices import kfold_indices
 from models.epoch_callback import member_callback
 from models.uncertainty import IntervalMixin
 
 log = logging.getLogger(__name__)
+RESAMPLE = ("kfold", "seeds")
 
 
 class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
-    def __init__(self, estimator=None, n_folds=5, seed=0, progress=True):
+    def __init__(self, estimator=None, n_folds=5, seed=0, progress=True, resample="kfold"):
         self.estimator = estimator
         self.n_folds = n_folds
         self.seed = seed
         self.progress = progress
+        self.resample = resample
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
@@ -40,14 +48,23 @@ class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         return tags
 
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
-        """X_val and y_val are accepted for the contract and not used: the folds validate."""
+        """X_val and y_val are not used by K-fold members (the folds validate); a seed ensemble
+        takes its data variance from them."""
         X, y = validate_data(self, X, y, multi_output=True, y_numeric=True, dtype=np.float64)
         if self.estimator is None:
             raise ValueError("KFoldBlend needs an estimator to blend")
+        if self.resample not in RESAMPLE:
+            raise InputError(f"model.resample must be one of {', '.join(RESAMPLE)}, got '{self.resample}'")
         y2 = y.reshape(len(y), -1)
         self.models_, self.fold_fit_time_s_, self.fold_fit_cpu_time_s_ = [], [], []
         out_of_fold = np.zeros_like(y2)
-        folds, self.fold_warning_ = kfold_indices(len(X), self.n_folds, self.seed, groups)
+        if self.resample == "seeds":
+            if not (isinstance(self.n_folds, (int, np.integer)) and self.n_folds >= 1):
+                raise InputError(f"a seed ensemble needs n_folds >= 1 members, got {self.n_folds!r}")
+            everything = np.arange(len(X))
+            folds, self.fold_warning_ = [(everything, everything[:0])] * self.n_folds, None
+        else:
+            folds, self.fold_warning_ = kfold_indices(len(X), self.n_folds, self.seed, groups)
         if self.fold_warning_:
             log.warning(self.fold_warning_)
         for k, (fit_rows, held_rows) in enumerate(progress(folds, desc="k-fold", unit="folds", enabled=self.progress)):
@@ -61,13 +78,17 @@ class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
             self.fold_fit_cpu_time_s_.append(time.process_time() - cpu_start)
             if hasattr(model, "predict_proba"):
                 out_of_fold = None
-            else:
+            elif len(held_rows):
                 out_of_fold[held_rows] = model.predict(X[held_rows]).reshape(len(held_rows), -1)
             self.models_.append(model)
-        if out_of_fold is not None:
+        self.single_output_ = y.ndim == 1
+        if out_of_fold is not None and self.resample == "kfold":
             self.out_of_fold_ = out_of_fold
             self.data_variance_ = ((y2 - out_of_fold) ** 2).mean(axis=0)
-        self.single_output_ = y.ndim == 1
+        elif out_of_fold is not None:  # a seed ensemble: residuals of rows it did not train on when there are any
+            rows_X, rows_y = (X, y2) if X_val is None or y_val is None else (
+                validate_data(self, X_val, reset=False, dtype=np.float64), np.asarray(y_val).reshape(len(y_val), -1))
+            self.data_variance_ = ((rows_y - self._fold_predictions(rows_X).mean(axis=0)) ** 2).mean(axis=0)
         return self
 
     def _fold_predictions(self, X) -> np.ndarray:

@@ -1,0 +1,211 @@
+"""Choose a model on validation within a time budget, and say what was chosen and why.
+
+One mechanism for every default that has to pick a model for data it has not seen: the
+recordings default (the ROCKET family, then nets), a classification table's classifiers, and
+the regression pipeline's blending variants. Candidates are fitted on the training rows,
+cheapest first, each scored on the validation rows (never the test rows); the best wins. With
+`ensemble=True` a validation-weighted mixture of the fitted candidates is one more candidate,
+chosen only when it scores above the best single one on validation.
+
+Budget: `budget_s` seconds for all fits. A candidate's cost is estimated before it runs as its
+`relative_cost` (config, measured ratios of fit time, e.g. PR-CNN against MiniRocket on the same
+data) times the measured seconds per unit of cost of the candidates already fitted; one whose
+estimate does not fit in what is left of the budget is skipped, with the estimate as its reason
+(`skipped_`). The cheapest candidate always runs, so a choice is always made.
+
+Scores (higher is better): regression, R^2 averaged over targets; classification, accuracy,
+ties broken by the lower log loss, then by the cheaper candidate.
+
+`candidates` is either {name: estimator} or {task: {name: estimator}} with task one of TASKS;
+the second form (configs/model/auto.yaml) lets one config serve every kind of data, and `task`
+(set by the run; "auto" reads it from the data: 3-D X is recordings, integer y a class label)
+picks the set.
+"""
+import inspect
+import logging
+import time
+
+import numpy as np
+from sklearn.base import BaseEstimator, clone
+from sklearn.metrics import accuracy_score, log_loss, r2_score
+from sklearn.utils.validation import check_is_fitted
+
+from common.errors import InputError
+from data.splits.indices import carve_validation
+from models.epoch_callback import member_callback
+
+log = logging.getLogger(__name__)
+TASKS = ("regression", "classification", "recordings")
+ENSEMBLE = "ensemble"
+
+
+def task_of(X, y) -> str:
+    """What kind of data (X, y) is: recordings (channels x steps per sample), class labels or quantities."""
+    if np.ndim(X) == 3:
+        return "recordings"
+    return "classification" if np.asarray(y).dtype.kind in "iub" and np.ndim(y) == 1 else "regression"
+
+
+def _fit_kwargs(estimator, **kwargs) -> dict:
+    """The keyword arguments among `kwargs` that the estimator's fit takes (plain scikit-learn
+    estimators take none of the run's validation rows, callbacks or groups)."""
+    accepted = inspect.signature(estimator.fit).parameters
+    return {k: v for k, v in kwargs.items() if k in accepted and v is not None}
+
+
+class ValidationChoice(BaseEstimator):
+    def __init__(self, candidates=None, task="auto", budget_s=None, relative_cost=None, ensemble=True,
+                 val_fraction=0.15, seed=0):
+        self.candidates = candidates
+        self.task = task
+        self.budget_s = budget_s
+        self.relative_cost = relative_cost
+        self.ensemble = ensemble
+        self.val_fraction = val_fraction
+        self.seed = seed
+
+    def candidate_set(self, task: str) -> dict:
+        """{name: estimator} this choice fits for data of `task`."""
+        candidates = self.candidates or {}
+        if candidates and all(hasattr(v, "fit") for v in candidates.values()):
+            return dict(candidates)
+        if task not in candidates or not candidates[task]:
+            raise InputError(f"model.candidates has no candidates for {task} data (it has: "
+                             f"{', '.join(candidates) or 'none'})")
+        return dict(candidates[task])
+
+    def set_candidate_params(self, **params) -> "ValidationChoice":
+        """Set `params` on every candidate that takes them (a run tells each time-series net its modalities)."""
+        sets = [self.candidates] if all(hasattr(v, "fit") for v in self.candidates.values()) else \
+            list(self.candidates.values())
+        for candidates in sets:
+            for estimator in candidates.values():
+                taken = {k: v for k, v in params.items() if k in estimator.get_params()}
+                if taken:
+                    estimator.set_params(**taken)
+        return self
+
+    def _check_params(self):
+        if self.budget_s is not None and not (isinstance(self.budget_s, (int, float)) and self.budget_s > 0):
+            raise InputError(f"model.budget_s must be a positive number of seconds or null, got {self.budget_s!r}")
+        for name, cost in (self.relative_cost or {}).items():
+            if not (isinstance(cost, (int, float)) and cost > 0):
+                raise InputError(f"model.relative_cost.{name} must be a positive number, got {cost!r}")
+
+    def _score(self, y_val, output) -> tuple:
+        """A sortable score, higher is better, and its readable form."""
+        if self.task_ == "regression":
+            y2 = np.asarray(y_val, dtype=np.float64).reshape(len(y_val), -1)
+            r2 = float(np.mean([r2_score(y2[:, k], output.reshape(y2.shape)[:, k]) for k in range(y2.shape[1])]))
+            return (r2,), {"r2": r2}
+        accuracy = float(accuracy_score(y_val, self.classes_[output.argmax(axis=1)]))
+        loss = float(log_loss(y_val, np.clip(output, 1e-15, 1), labels=self.classes_))
+        return (accuracy, -loss), {"accuracy": accuracy, "loss": loss}
+
+    def _output(self, model, X):
+        """What a candidate is scored on: predictions (regression) or class probabilities."""
+        if self.task_ == "regression":
+            return np.asarray(model.predict(X), dtype=np.float64)
+        proba = np.zeros((len(X), len(self.classes_)))
+        proba[:, np.searchsorted(self.classes_, model.classes_)] = model.predict_proba(X)
+        return proba
+
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
+        self._check_params()
+        self.task_ = task_of(X, y) if self.task == "auto" else self.task
+        if self.task_ not in TASKS:
+            raise InputError(f"model.task must be auto or one of {', '.join(TASKS)}, got '{self.task}'")
+        candidates = self.candidate_set(self.task_)
+        if X_val is None or y_val is None:
+            fit_rows, val_rows = carve_validation(len(X), self.val_fraction, self.seed, groups)
+            X, y, X_val, y_val = X[fit_rows], y[fit_rows], X[val_rows], y[val_rows]
+            groups = None if groups is None else np.asarray(groups)[fit_rows]
+        if self.task_ != "regression":
+            self.classes_ = np.unique(np.concatenate([np.asarray(y), np.asarray(y_val)]))
+            self.majority_accuracy_ = float(np.unique(y_val, return_counts=True)[1].max() / len(y_val))
+        costs = {name: float((self.relative_cost or {}).get(name, 1.0)) for name in candidates}
+        order = sorted(candidates, key=lambda name: costs[name])   # stable: ties keep the listed order
+        self.models_, self.scores_, self.fit_time_s_, self.skipped_ = {}, {}, {}, {}
+        ranks, outputs, start, spent_per_cost = {}, {}, time.perf_counter(), []
+        for name in order:
+            elapsed = time.perf_counter() - start
+            if self.models_ and self.budget_s is not None:
+                estimate = costs[name] * float(np.mean(spent_per_cost))
+                if elapsed + estimate > self.budget_s:
+                    self.skipped_[name] = (f"estimated {estimate:.1f} s (relative cost {costs[name]:g} x "
+                                           f"{np.mean(spent_per_cost):.2f} s measured per unit) exceeds the "
+                                           f"{max(self.budget_s - elapsed, 0):.1f} s left of model.budget_s="
+                                           f"{self.budget_s:g}")
+                    log.info("model choice: %s skipped, %s", name, self.skipped_[name])
+                    continue
+            began = time.perf_counter()
+            model = clone(candidates[name]).fit(X, y, **_fit_kwargs(
+                candidates[name], X_val=X_val, y_val=y_val, groups=groups,
+                epoch_callback=member_callback(epoch_callback, name) if epoch_callback else None))
+            self.fit_time_s_[name] = time.perf_counter() - began
+            spent_per_cost.append(self.fit_time_s_[name] / costs[name])
+            outputs[name] = self._output(model, X_val)
+            ranks[name], self.scores_[name] = self._score(y_val, outputs[name])
+            self.models_[name] = model
+            log.info("model choice: %s fitted in %.1f s, validation %s", name, self.fit_time_s_[name],
+                     ", ".join(f"{k} {v:.4f}" for k, v in self.scores_[name].items()))
+        best = max(ranks, key=lambda name: ranks[name])   # max keeps the first (cheapest) of equals
+        self.ensemble_weights_ = None
+        if self.ensemble and len(self.models_) > 1:
+            weights = self._ensemble_weights()
+            if weights is not None:
+                mixed = sum(w * outputs[name] for name, w in weights.items())
+                rank, self.scores_[ENSEMBLE] = self._score(y_val, mixed)
+                if rank > ranks[best]:
+                    best, self.ensemble_weights_ = ENSEMBLE, weights
+        self.chosen_ = best
+        self.reason_ = self._reason(ranks)
+        log.info("model choice: %s", self.reason_)
+        return self
+
+    def _ensemble_weights(self) -> dict | None:
+        """Weights of the validation-weighted mixture: the candidates' validation score above
+        what a constant predicts (R^2 0; the majority class's accuracy), normalised; None when
+        fewer than two candidates beat that."""
+        key = "r2" if self.task_ == "regression" else "accuracy"
+        floor = 0.0 if self.task_ == "regression" else self.majority_accuracy_
+        above = {n: s[key] - floor for n, s in self.scores_.items() if n in self.models_ and s[key] > floor}
+        if len(above) < 2:
+            return None
+        total = sum(above.values())
+        return {n: v / total for n, v in above.items()}
+
+    def _reason(self, ranks) -> str:
+        metric = "R^2" if self.task_ == "regression" else "accuracy"
+        key = "r2" if self.task_ == "regression" else "accuracy"
+        shown = ", ".join(f"{n} {s[key]:.4f}" for n, s in self.scores_.items())
+        text = f"chose {self.chosen_} on validation {metric} ({shown})"
+        if self.skipped_:
+            text += f"; skipped for the budget: {', '.join(self.skipped_)}"
+        return text
+
+    @property
+    def chosen_model_(self):
+        """The estimator the run deploys (None when the validation-weighted ensemble won)."""
+        check_is_fitted(self, "chosen_")
+        return None if self.chosen_ == ENSEMBLE else self.models_[self.chosen_]
+
+    def predict(self, X):
+        check_is_fitted(self, "chosen_")
+        if self.task_ == "regression":
+            if self.ensemble_weights_ is None:
+                return self.models_[self.chosen_].predict(X)
+            return sum(w * np.asarray(self.models_[n].predict(X)) for n, w in self.ensemble_weights_.items())
+        return self.classes_[self.predict_proba(X).argmax(axis=1)]
+
+    def predict_proba(self, X):
+        check_is_fitted(self, "chosen_")
+        names = self.ensemble_weights_ or {self.chosen_: 1.0}
+        return sum(w * self._output(self.models_[n], X) for n, w in names.items())
+
+    def report(self) -> dict:
+        """What metrics.json says of the choice."""
+        check_is_fitted(self, "chosen_")
+        return {"task": self.task_, "chosen": self.chosen_, "reason": self.reason_, "budget_s": self.budget_s,
+                "validation": self.scores_, "fit_time_s": self.fit_time_s_, "skipped": self.skipped_,
+                "ensemble_weights": self.ensemble_weights_}

@@ -1,0 +1,129 @@
+"""models/validation_choice.py: candidates fitted cheapest first, scored on validation only, the
+best kept (or the validation-weighted mixture when it wins), the budget skipping candidates
+before they run, and what was chosen said with its reason."""
+import time
+
+import numpy as np
+import pytest
+from sklearn.base import BaseEstimator, ClassifierMixin, RegressorMixin
+
+from common.errors import InputError
+from models.classic_classifiers import TableClassifier
+from models.trees import TreeRegressor
+from models.validation_choice import ENSEMBLE, ValidationChoice, task_of
+
+
+class Constant(RegressorMixin, BaseEstimator):
+    def __init__(self, value=0.0, sleep_s=0.0):
+        self.value = value
+        self.sleep_s = sleep_s
+
+    def fit(self, X, y):
+        time.sleep(self.sleep_s)
+        self.n_outputs_ = np.asarray(y).reshape(len(y), -1).shape[1]
+        return self
+
+    def predict(self, X):
+        return np.full((len(X), self.n_outputs_), self.value)
+
+
+class OneFeature(ClassifierMixin, BaseEstimator):
+    """Classifies by the sign of one feature, surer the larger it is."""
+    def __init__(self, feature=0):
+        self.feature = feature
+
+    def fit(self, X, y, X_val=None, y_val=None):
+        self.classes_ = np.unique(y)
+        self.saw_validation_ = X_val is not None
+        return self
+
+    def predict_proba(self, X):
+        positive = 1 / (1 + np.exp(-3 * X[:, self.feature]))
+        return np.column_stack([1 - positive, positive])
+
+
+def regression_data(n=300, seed=0):
+    rng = np.random.default_rng(seed)
+    X = rng.uniform(-2, 2, (n, 3))
+    return X, np.column_stack([X[:, 0] + 0.1 * rng.standard_normal(n), X[:, 1] ** 2])
+
+
+def test_the_best_candidate_on_validation_wins_and_predicts_as_itself():
+    X, y = regression_data()
+    trees = TreeRegressor(kind="extra_trees", n_estimators=20, max_depth=None, seed=0)
+    choice = ValidationChoice({"constant": Constant(), "trees": trees}, ensemble=False)
+    choice.fit(X[:200], y[:200], X[200:250], y[200:250])
+    assert choice.chosen_ == "trees" and choice.task_ == "regression"
+    assert choice.scores_["trees"]["r2"] > 0.5 > choice.scores_["constant"]["r2"]
+    np.testing.assert_array_equal(choice.predict(X[250:]), choice.chosen_model_.predict(X[250:]))
+    assert "chose trees on validation R^2" in choice.reason_ and choice.report()["chosen"] == "trees"
+
+
+def test_the_test_rows_never_decide_the_choice():
+    """Validation labels that the first candidate predicts and the test rows that only the second does."""
+    rng = np.random.default_rng(1)
+    X = rng.standard_normal((400, 2))
+    y = (X[:, 0] > 0).astype(int)
+    X_val = X[300:]
+    y_val = (X_val[:, 1] > 0).astype(int)   # feature 1 carries the label on validation only
+    choice = ValidationChoice({"first": OneFeature(0), "second": OneFeature(1)}, ensemble=False)
+    choice.fit(X[:300], y[:300], X_val, y_val)
+    assert choice.chosen_ == "second" and choice.task_ == "classification"
+    assert choice.models_["second"].saw_validation_   # passed on to candidates that take it
+
+
+def test_the_budget_skips_a_candidate_by_its_estimated_cost_before_it_runs():
+    X, y = regression_data(60)
+    candidates = {"quick": Constant(0.0, sleep_s=0.05), "slow": Constant(1.0, sleep_s=5.0)}
+    start = time.perf_counter()
+    choice = ValidationChoice(candidates, budget_s=1.0, relative_cost={"quick": 1, "slow": 200}, ensemble=False)
+    choice.fit(X[:40], y[:40], X[40:], y[40:])
+    assert time.perf_counter() - start < 5.0          # the slow one never ran
+    assert set(choice.models_) == {"quick"} and list(choice.skipped_) == ["slow"]
+    assert "relative cost 200" in choice.skipped_["slow"] and "budget" in choice.reason_
+    # without a budget it runs, cheapest first
+    choice = ValidationChoice({"slow": Constant(1.0), "quick": Constant(0.0)}, relative_cost={"slow": 9}).fit(
+        X[:40], y[:40], X[40:], y[40:])
+    assert list(choice.models_) == ["quick", "slow"] and not choice.skipped_
+
+
+def test_the_ensemble_is_chosen_only_when_it_wins_on_validation():
+    rng = np.random.default_rng(2)
+    X = rng.standard_normal((600, 2))
+    y = ((X[:, 0] + X[:, 1]) > 0).astype(int)   # each one-feature classifier is right 3/4 of the time
+    # the two candidates' mean probability is right more often than either alone
+    choice = ValidationChoice({"a": OneFeature(0), "b": OneFeature(1)}).fit(X[:400], y[:400], X[400:], y[400:])
+    single = max(choice.scores_["a"]["accuracy"], choice.scores_["b"]["accuracy"])
+    assert choice.chosen_ == ENSEMBLE and choice.chosen_model_ is None
+    assert choice.scores_[ENSEMBLE]["accuracy"] > single
+    np.testing.assert_allclose(sum(choice.ensemble_weights_.values()), 1.0)
+    mixed = sum(w * choice.models_[n].predict_proba(X[400:]) for n, w in choice.ensemble_weights_.items())
+    np.testing.assert_allclose(choice.predict_proba(X[400:]), mixed)
+    # a mixture that does not beat the best candidate is not chosen
+    y_easy = (X[:, 0] > 0).astype(int)
+    choice = ValidationChoice({"a": OneFeature(0), "b": OneFeature(1)}).fit(X[:400], y_easy[:400], X[400:],
+                                                                           y_easy[400:])
+    assert choice.chosen_ == "a"
+
+
+def test_the_candidate_set_follows_the_data_and_a_missing_set_is_one_line():
+    assert task_of(np.zeros((4, 2, 10)), np.array([0, 1, 0, 1])) == "recordings"
+    assert task_of(np.zeros((4, 2)), np.array([0, 1, 0, 1])) == "classification"
+    assert task_of(np.zeros((4, 2)), np.zeros((4, 2))) == "regression"
+    X, y = regression_data(80)
+    by_task = {"regression": {"constant": Constant()},
+               "classification": {"trees": TableClassifier(kind="extra_trees", n_estimators=5)}}
+    choice = ValidationChoice(by_task, seed=3).fit(X, y)            # no validation given: carves its own
+    assert choice.chosen_ == "constant"
+    with pytest.raises(InputError, match="no candidates for recordings data"):
+        ValidationChoice(by_task).fit(np.zeros((20, 2, 8)), np.arange(20) % 2)
+    with pytest.raises(InputError, match="budget_s must be a positive number"):
+        ValidationChoice(by_task, budget_s=-1).fit(X, y)
+
+
+def test_same_seed_same_choice():
+    X, y = regression_data(200)
+    make = lambda: ValidationChoice({"a": TreeRegressor(kind="extra_trees", n_estimators=10, seed=0),  # noqa: E731
+                                     "b": TreeRegressor(kind="random_forest", n_estimators=10, seed=0)}, seed=4)
+    first, second = make().fit(X, y), make().fit(X, y)
+    assert first.chosen_ == second.chosen_ and first.scores_ == second.scores_
