@@ -78,6 +78,9 @@ ALLOWED_CLASSES = frozenset({
     "models.nets.inceptiontime.InceptionTime",
     "models.nets.inceptiontime.InceptionModule",
     "models.nets.lstm_fcn.LSTMFCN",
+    "models.rocket.classifier.RocketClassifier",
+    "models.rocket.minirocket.MiniRocket",
+    "models.rocket.minirocket.DilationGroup",
     # the torch.nn layers those networks are made of
     "torch.nn.modules.activation.ReLU",
     "torch.nn.modules.batchnorm.BatchNorm1d",

@@ -1,0 +1,170 @@
+"""The MiniRocket transform (Dempster, Schmidt and Webb 2021, "MINIROCKET: a very fast (almost)
+deterministic transform for time series classification"), multichannel as in its multivariate
+variant, written as one torch module that both the eager pipeline and the ONNX export run.
+
+The 84 kernels have length 9 and weights -1 at six positions and +2 at three (every choice of
+three of nine), so a kernel's output is
+
+    C = 3 * (x[t + a d] + x[t + b d] + x[t + c d]) - sum_j x[t + j d]     (j = 0..8, shifted by -4d)
+
+(the paper's alpha = -X summed over the nine shifted copies and gamma = 3X at the kernel's three
+positions). The nine shifted copies of the input are made once per dilation and shared by all 84
+kernels: the graph gathers three of them per kernel and adds, it never runs 84 convolutions.
+Dilations are 2^0 .. (length-1)/8 spaced exponentially, with as many features per kernel at each
+as the paper's 10,000-feature budget gives (9,996 = 84 x 119). Half of the (dilation, kernel)
+pairs, alternating, pool over the whole zero-padded output, the others over the part the padding
+does not reach. Each (dilation, kernel) sees a random combination of 1 to min(channels, 9)
+channels (summed before the kernel, as the convolution is linear); its biases are quantiles of
+its output on one random training window, at the low-discrepancy quantiles (k * golden ratio)
+mod 1; a feature is the proportion of positive values (PPV) of output minus bias.
+
+Everything is float32 and the additions run in a fixed order, so onnxruntime reproduces the eager
+features exactly up to the last bit of the mean; on signals with flat stretches many biases sit
+at an output value itself, where a rounding difference flips a comparison.
+"""
+import itertools
+import math
+
+import numpy as np
+import torch
+from torch import nn
+
+KERNEL_LENGTH = 9
+KERNEL_POSITIONS = torch.tensor(list(itertools.combinations(range(KERNEL_LENGTH), 3)), dtype=torch.long)  # 84 x 3
+N_KERNELS = len(KERNEL_POSITIONS)
+MIN_LENGTH = KERNEL_LENGTH
+GOLDEN_RATIO = (math.sqrt(5) + 1) / 2
+
+
+def dilations_and_features(length: int, n_features: int, max_dilations_per_kernel: int = 32):
+    """(dilations, features per kernel at each): the paper's exponential spacing of dilations up
+    to (length - 1) / 8, its feature budget spread over them, the remainder one at a time."""
+    per_kernel = n_features // N_KERNELS
+    n_dilations = min(per_kernel, max_dilations_per_kernel)
+    multiplier = per_kernel / n_dilations
+    max_exponent = math.log2((length - 1) / (KERNEL_LENGTH - 1))
+    dilations, counts = np.unique(np.floor(np.logspace(0, max_exponent, n_dilations, base=2)).astype(np.int64),
+                                  return_counts=True)
+    counts = (counts * multiplier).astype(np.int64)
+    for k in range(per_kernel - int(counts.sum())):
+        counts[k % len(counts)] += 1
+    return [int(d) for d in dilations], [int(c) for c in counts]
+
+
+def quantiles(n: int) -> np.ndarray:
+    """The first n of the low-discrepancy sequence (k * golden ratio) mod 1, k = 1, 2, ..."""
+    return (np.arange(1, n + 1) * GOLDEN_RATIO) % 1
+
+
+class DilationGroup(nn.Module):
+    """The dilations that have the same number of features per kernel, computed at once:
+    windows [batch, channels, length] -> their PPV features [batch, dilations x 84 x count].
+
+    One Gather makes the nine shifted copies at every dilation of the group [batch, channels,
+    dilations, 9, length], three Gathers and Adds the 84 kernels' outputs, one Greater / Cast /
+    ReduceSum the PPVs. Kernels pooled over the inner part get -inf outside it (`pool_offset`:
+    never above a bias) and their count divided by the inner length (`pool_scale`)."""
+
+    def __init__(self, n_channels: int, length: int, dilations: list[int], first_index: int, count: int):
+        super().__init__()
+        self.n_channels, self.count = n_channels, count
+        d = torch.tensor(dilations)
+        shifts = (torch.arange(KERNEL_LENGTH) - KERNEL_LENGTH // 2)[None, :, None] * d[:, None, None]
+        self.padding = 4 * max(dilations)
+        self.register_buffer("shift_index", self.padding + shifts + torch.arange(length)[None, None, :])
+        self.register_buffer("kernel_positions", KERNEL_POSITIONS.clone())
+        self.register_buffer("channel_mask", torch.ones(n_channels, len(dilations), N_KERNELS, 1))
+        self.register_buffer("biases", torch.zeros(len(dilations), N_KERNELS, count, 1))
+        # the paper alternates, from the first dilation on, kernels pooled over the whole output and over the inner part
+        index = first_index + torch.arange(len(dilations))
+        inner = (index[:, None] + torch.arange(N_KERNELS)[None, :]) % 2 == 1                  # [D, 84]
+        crop = (4 * d)[:, None, None] * inner[:, :, None]                                        # [D, 84, 1]
+        t = torch.arange(length)[None, None, :]
+        self.register_buffer("pool_offset", torch.where((t < crop) | (t >= length - crop), -math.inf, 0.0))
+        self.register_buffer("pool_scale", 1.0 / (length - 2 * crop).float())
+
+    def convolutions(self, x: torch.Tensor) -> torch.Tensor:
+        """The 84 kernels' outputs at each of the group's dilations on each kernel's channel
+        combination, zero-padded: [batch, dilations, 84, length]."""
+        padded = nn.functional.pad(x, (self.padding, self.padding))
+        shifted = padded[:, :, self.shift_index]                     # [batch, channels, D, 9, length]
+        total = shifted[:, :, :, 0]
+        for j in range(1, KERNEL_LENGTH):
+            total = total + shifted[:, :, :, j]
+        positions = self.kernel_positions
+        gamma = (shifted.index_select(3, positions[:, 0]) + shifted.index_select(3, positions[:, 1])
+                 + shifted.index_select(3, positions[:, 2]))
+        per_channel = 3 * gamma - total.unsqueeze(3)                 # [batch, channels, D, 84, length]
+        if self.n_channels == 1:
+            return per_channel[:, 0]
+        combined = per_channel[:, 0] * self.channel_mask[0]
+        for c in range(1, self.n_channels):
+            combined = combined + per_channel[:, c] * self.channel_mask[c]
+        return combined
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        pooled = (self.convolutions(x) + self.pool_offset).unsqueeze(3)          # [batch, D, 84, 1, length]
+        counts = (pooled > self.biases).float().sum(-1)                          # [batch, D, 84, count]
+        return (counts * self.pool_scale).flatten(1)
+
+
+class MiniRocket(nn.Module):
+    """windows [batch, channels, length] float32 (standardised) -> PPV features [batch, n_features]
+    (`transform`: dilation groups in turn, within one by dilation, kernel, bias), or -> class
+    logits through the fitted linear head (`forward`)."""
+
+    def __init__(self, n_channels: int, length: int, n_features: int = 10_000, n_classes: int = 2):
+        super().__init__()
+        self.n_channels, self.length = int(n_channels), int(length)
+        self.dilations, self.features_per_kernel = dilations_and_features(self.length, n_features)
+        groups = []
+        for count in sorted(set(self.features_per_kernel)):
+            members = [i for i, c in enumerate(self.features_per_kernel) if c == count]
+            # consecutive runs only, so that a group's dilation indices are first_index, first_index + 1, ...
+            runs = np.split(members, np.nonzero(np.diff(members) > 1)[0] + 1)
+            groups += [(int(run[0]), len(run), count) for run in runs]
+        self.groups = nn.ModuleList([DilationGroup(self.n_channels, self.length, self.dilations[i:i + n], i, count)
+                                     for i, n, count in sorted(groups)])
+        self.head = nn.Linear(self.n_features, n_classes)
+
+    @property
+    def n_features(self) -> int:
+        return N_KERNELS * sum(self.features_per_kernel)
+
+    def transform(self, x: torch.Tensor) -> torch.Tensor:
+        return torch.cat([group(x) for group in self.groups], dim=1)
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return self.head(self.transform(x))
+
+    def fit_biases(self, x: np.ndarray, rng: np.random.Generator, chunk: int) -> None:
+        """Draw each (dilation, kernel)'s channel combination and training window (in the order of
+        the dilations), and set its biases to quantiles of that window's output."""
+        max_exponent = math.log2(min(self.n_channels, KERNEL_LENGTH) + 1)
+        masks = np.zeros((len(self.dilations), N_KERNELS, self.n_channels), dtype=np.float32)
+        examples = np.zeros((len(self.dilations), N_KERNELS), dtype=np.int64)
+        for i in range(len(self.dilations)):
+            for k in range(N_KERNELS):
+                n_combined = int(2 ** rng.uniform(0, max_exponent))
+                masks[i, k, rng.choice(self.n_channels, n_combined, replace=False)] = 1.0
+            examples[i] = rng.integers(len(x), size=N_KERNELS)
+        sequence = quantiles(self.n_features)
+        starts = np.concatenate([[0], np.cumsum(self.features_per_kernel) * N_KERNELS])
+        i = 0
+        for group in self.groups:
+            n = group.biases.shape[0]
+            group.channel_mask.copy_(torch.from_numpy(masks[i:i + n].transpose(2, 0, 1)[..., None]))
+            unique, where = np.unique(examples[i:i + n], return_inverse=True)
+            where = torch.from_numpy(where.reshape(n, N_KERNELS))
+            own = torch.zeros(n, N_KERNELS, self.length)
+            with torch.no_grad():
+                for s in range(0, len(unique), chunk):
+                    outputs = group.convolutions(torch.from_numpy(x[unique[s:s + chunk]]))   # [chunk, D, 84, length]
+                    for e in range(outputs.shape[0]):
+                        mine = where == s + e
+                        own[mine] = outputs[e][mine]
+            for j in range(n):
+                levels = sequence[starts[i + j]:starts[i + j + 1]].reshape(N_KERNELS, group.count)
+                biases = np.stack([np.quantile(own[j, k].numpy(), levels[k]) for k in range(N_KERNELS)])
+                group.biases[j, :, :, 0] = torch.from_numpy(biases.astype(np.float32))
+            i += n
