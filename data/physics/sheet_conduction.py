@@ -85,7 +85,11 @@ class SheetSolver:
     then costs one sparse LU per conductance map.
     """
 
-    def __init__(self, grid: SheetGrid):
+    def __init__(self, grid: SheetGrid, anisotropy: float = 1.0):
+        """`anisotropy`: sheet conductance along x over that along y (1 = isotropic); the two
+        directions take sqrt(anisotropy) and 1/sqrt(anisotropy) of the node conductance."""
+        if not anisotropy > 0:
+            raise InputError(f"sheet anisotropy must be > 0, got {anisotropy}")
         self.grid = grid
         n = grid.n_nodes
         index = np.arange(n * n).reshape(n, n)
@@ -96,7 +100,7 @@ class SheetSolver:
         self.edges = np.vstack([horizontal, vertical])
         weight_h = np.ones((n, n - 1)); weight_h[[0, -1], :] = 0.5
         weight_v = np.ones((n - 1, n)); weight_v[:, [0, -1]] = 0.5
-        self.edge_weight = np.concatenate([weight_h.ravel(), weight_v.ravel()])
+        self.edge_weight = np.concatenate([weight_h.ravel() * np.sqrt(anisotropy), weight_v.ravel() / np.sqrt(anisotropy)])
 
         # Unknowns: each free node has its own potential; each electrode's nodes share one.
         electrode_nodes = grid.electrode_nodes()

@@ -239,7 +239,7 @@ class ERTScene:
         n_side = int(round(self.side_mm / self.patch_mm))
         state = {"electrodes_mm": np.asarray(self.electrodes_mm, dtype=float), "side_mm": float(self.side_mm),
                  "n_patches": n_side * n_side, "patch_base_resistance_scale": np.ones(n_side * n_side),
-                 "patch_sensitivity_scale": np.ones(n_side * n_side)}
+                 "patch_sensitivity_scale": np.ones(n_side * n_side), "anisotropy_ratio": 1.0}
         for name, fn, params in resolve_effects(self.name, self.effects, EFFECTS):
             if name in SENSOR_EFFECTS:
                 fn(state, random_generator_for(self.seed, name), **params)
@@ -249,7 +249,7 @@ class ERTScene:
         return sheet_solver(float(self.side_mm), int(self.grid_nodes), float(self.electrode_width_mm),
                             tuple(map(tuple, np.round(sensor["electrodes_mm"], 9))), float(self.patch_mm),
                             float(self.sheet_resistance_ohm_per_sq),
-                            tuple(np.round(sensor["patch_base_resistance_scale"], 12)))
+                            tuple(np.round(sensor["patch_base_resistance_scale"], 12)), float(sensor["anisotropy_ratio"]))
 
     # -- protocols --------------------------------------------------------------------------------
     def grid_points_mm(self, per_side=None) -> np.ndarray:
@@ -309,24 +309,34 @@ class ERTScene:
         effects = resolve_effects(self.name, self.effects, EFFECTS)
         sensor = self.sensor() if sensor is None else sensor
         solver = self._solver(sensor)
-        n_side = int(round(self.side_mm / self.patch_mm))
         node_patch = patch_weights(solver.solver.grid.node_xy_mm, self.side_mm, self.patch_mm)
         base_nodes = solver._base_nodes
         press = {"geometry": {"foam_thickness_mm": self.foam_thickness_mm}, "spread_sd_mm": 0.0,
-                 "patch_sensitivity_scale": sensor["patch_sensitivity_scale"]}
+                 "patch_sensitivity_scale": sensor["patch_sensitivity_scale"], "local": False}
         for name, fn, params in effects:
-            if name == "foam_spread":
+            if name in ("foam_spread", "local_contact"):
                 fn(press, **params)
-        press["patch_force_n"] = patch_loads_n(contacts, self.side_mm, self.patch_mm,
-                                               self.indenter_diameter_mm / 2.0, press["spread_sd_mm"])
-        press["patch_conductance_factor"] = np.ones((len(contacts), n_side * n_side))
+        radius = self.indenter_diameter_mm / 2.0
+        if press["local"]:
+            # Loads on the grid nodes' cells, scaled to the force that loads a whole patch to the
+            # same pressure; each node takes its patch's sensitivity.
+            spacing = solver.solver.grid.spacing_mm
+            cell = np.asarray(contacts, dtype=float).copy()
+            cell[..., :2] += spacing / 2.0
+            press["patch_force_n"] = patch_loads_n(cell, self.side_mm + spacing, spacing, radius,
+                                                   press["spread_sd_mm"]) * (self.patch_mm / spacing) ** 2
+            press["patch_sensitivity_scale"] = node_patch @ sensor["patch_sensitivity_scale"]
+        else:
+            press["patch_force_n"] = patch_loads_n(contacts, self.side_mm, self.patch_mm, radius, press["spread_sd_mm"])
+        press["patch_conductance_factor"] = np.ones_like(press["patch_force_n"])
         for name, fn, params in effects:
-            if name in PRESS_EFFECTS and name != "foam_spread":
-                if name in ("hysteresis",):
+            if name in PRESS_EFFECTS and name not in ("foam_spread", "local_contact"):
+                if name in ("hysteresis", "viscoelastic_hysteresis"):
                     fn(press, self._stream(f"{self.protocol}/{name}"), **params)
                 else:
                     fn(press, **params)
-        node_conductance = base_nodes[None, :] * (press["patch_conductance_factor"] @ node_patch.T)
+        factor = press["patch_conductance_factor"]
+        node_conductance = base_nodes[None, :] * (factor if press["local"] else factor @ node_patch.T)
         return solver.transfer_resistance(node_conductance, chunk=128, group_by_size=True)
 
     def patch_jacobian(self, sensor) -> np.ndarray:
@@ -356,7 +366,8 @@ class ERTScene:
         baseline = four_terminal_voltage_v(z0, injections, measurements, self.current_a).reshape(1, -1)
         reading = {"voltage_v": four_terminal_voltage_v(z, injections, measurements, self.current_a).reshape(n, -1),
                    "baseline_v": np.repeat(baseline, n_recordings, axis=0), "recording": recording,
-                   "patch_jacobian": lambda: self.patch_jacobian(sensor)}
+                   "patch_jacobian": lambda: self.patch_jacobian(sensor), "patterns": (injections, measurements),
+                   "current_a": float(self.current_a)}
         for name, fn, params in effects:
             if name in READING_EFFECTS:
                 fn(reading, self._stream(f"{self.protocol}/{name}"), **params)
@@ -396,10 +407,10 @@ class ERTScene:
 
 @lru_cache(maxsize=6)
 def sheet_solver(side_mm, grid_nodes, electrode_width_mm, electrodes_mm, patch_mm, sheet_resistance_ohm_per_sq,
-                 patch_base_resistance_scale) -> PatchUpdateSolver:
-    """The patch-update solver for one sensor (geometry and base map), built once per process."""
+                 patch_base_resistance_scale, anisotropy=1.0) -> PatchUpdateSolver:
+    """The patch-update solver for one sensor (geometry, base map, anisotropy), built once per process."""
     grid = SheetGrid(side_mm, grid_nodes, np.asarray(electrodes_mm, dtype=float), electrode_width_mm)
-    solver = SheetSolver(grid)
+    solver = SheetSolver(grid, anisotropy)
     share = patch_weights(grid.node_xy_mm, side_mm, patch_mm)
     base = 1.0 / (sheet_resistance_ohm_per_sq * (share @ np.asarray(patch_base_resistance_scale)))
     return PatchUpdateSolver(solver, base, max_patch_nodes=700)

@@ -3,12 +3,16 @@
 Three stages, in the sensor's chain order:
 - sensor effects change the sensor once per scene (per seed): `specimen_variation` (each patch's
   base resistance and sensitivity), `electrode_position_error` (where the sewn electrodes
-  really are);
-- press effects turn indenters into a per-patch conductance factor: `foam_spread` (how the
-  neoprene shares a load among patches), `hysteresis` (loading vs unloading branch),
-  `contact_resistance` (the patch-on-fabric transducer curve; without it no press changes
-  the sheet, so a scene without it is silent);
-- reading effects act on the voltages: `baseline_drift`, `adc_noise`.
+  really are), `fabric_anisotropy` (the knit conducts differently along courses and wales);
+- press effects turn indenters into a conductance factor per patch, or per grid node with
+  `local_contact` (the patch shorts only the fabric it touches): `foam_spread` (how the
+  neoprene shares a load among patches), `hysteresis` (loading vs unloading branch, a fed-in
+  fraction) or `viscoelastic_hysteresis` (the foam's standard linear solid,
+  data/physics/textile_contact.py), `contact_resistance` (the fed-in transducer curve) or
+  `textile_contact` (Holm spots counted Greenwood-Williamson style in parallel with the base
+  fabric); without one of the two transducers no press changes the sheet, so the scene is silent;
+- reading effects act on the voltages: `electrode_contact_impedance` (stitched electrodes'
+  contact resistance and its drift), `baseline_drift`, `adc_noise`.
 Every parameter is a keyword with its unit in its name; each effect draws from its own
 generator `rng` (data/scenes/contract.py).
 """
@@ -47,7 +51,28 @@ def electrode_position_error(state, rng, sd_mm=2.0):
     state["electrodes_mm"] = np.clip(moved, 0.0, side)
 
 
+def fabric_anisotropy(state, rng, ratio=2.0):
+    """The knitted base fabric conducts differently along its courses (x) and wales (y): the paper
+    calls both fabrics orthotropic (seed 002 §6) but gives no ratio, so `ratio` (sheet conductance
+    along x / along y, geometric mean kept at the nominal value) is our choice. The
+    reconstruction, built from the nominal isotropic sheet, does not know it."""
+    if not ratio > 0:
+        _fail("fabric_anisotropy", f"ratio must be > 0, got {ratio}")
+    state["anisotropy_ratio"] = float(ratio)
+
+
 # -- press effects ----------------------------------------------------------------------------
+def local_contact(state):
+    """The low-resistance patch shorts only the base fabric it touches, not its whole 20 x 20 mm
+    square: a 20 Ohm/sq patch is an equipotential next to the 20 kOhm/sq base (seed 002 §3.1,
+    table 1), connected to it through the fibre contacts under the load (fig. 3(b)), so the
+    parallel path covers the pressed area (the footprint spread by the foam) within the patch.
+    The transducer law then acts on each grid node's local load, expressed as the force that
+    would load a whole patch to the same pressure (the paper's curve was taken with the patch
+    pressed over its entire surface, §3.2). Without it every node of a loaded patch changes alike."""
+    state["local"] = True
+
+
 def foam_spread(state, spread_per_thickness=1.0):
     """The 4 mm neoprene spreads each indenter's load over neighbouring patches. A load on an
     elastic layer reaches the layer below spread over a width of the order of the layer's
@@ -57,6 +82,26 @@ def foam_spread(state, spread_per_thickness=1.0):
     if spread_per_thickness < 0:
         _fail("foam_spread", f"spread_per_thickness must be >= 0, got {spread_per_thickness}")
     state["spread_sd_mm"] = spread_per_thickness * state["geometry"]["foam_thickness_mm"]
+
+
+def viscoelastic_hysteresis(state, rng, relaxation_strength=None, relaxation_time_s=None,
+                            frequency_range_hz=(1.0, 12.0)):
+    """The loading/unloading difference from the foam and fabric's viscoelasticity instead of a
+    fed-in fraction: the compression that closes the fibre contacts follows the force through a
+    standard linear solid (data/physics/textile_contact.py; defaults fitted there to the paper's
+    8.3 % over 1-12 Hz). Each press is caught on a haversine load cycle of a frequency drawn in
+    `frequency_range_hz`, at a random point of its loading or unloading half; the transducer sees
+    the force that the lagging compression corresponds to."""
+    from data.physics.textile_contact import FOAM, lag_factor
+    strength = FOAM["relaxation_strength"] if relaxation_strength is None else relaxation_strength
+    tau = FOAM["relaxation_time_s"] if relaxation_time_s is None else relaxation_time_s
+    low, high = frequency_range_hz
+    if strength < 0 or not tau > 0 or not 0 < low <= high:
+        _fail("viscoelastic_hysteresis", f"needs relaxation_strength >= 0, relaxation_time_s > 0 and "
+                                         f"0 < frequency low <= high, got {strength}, {tau}, {list(frequency_range_hz)}")
+    n = len(state["patch_force_n"])
+    factor = lag_factor(rng.uniform(low, high, n), rng.random(n) < 0.5, rng.uniform(0.2, 1.0, n), strength, tau)
+    state["patch_force_n"] = state["patch_force_n"] * factor[:, None]
 
 
 def hysteresis(state, rng, mean_fraction=0.083, sd_fraction=0.047):
@@ -88,7 +133,64 @@ def contact_resistance(state, initial_slope_per_n=0.0696, saturated_fraction=0.0
     state["patch_conductance_factor"] = 1.0 / ratio
 
 
+def textile_contact(state, initial_slope_per_n=None, saturated_fraction=None, crossing_shape=None):
+    """The transducer from fibre-contact physics (data/physics/textile_contact.py
+    `normalised_resistance`): Holm constriction spots at the fibre crossings, their number set
+    by a Weibull distribution of closure forces (Greenwood-Williamson counting), in parallel with
+    the base fabric. Defaults (textile_contact.CONTACT): the paper's slope over the early 10 N and
+    9.9 % saturation, the Weibull shape fitted there so the curve stays straight to 10 N."""
+    from data.physics.textile_contact import CONTACT, normalised_resistance
+    params = {"initial_slope_per_n": initial_slope_per_n, "saturated_fraction": saturated_fraction,
+              "crossing_shape": crossing_shape}
+    params = {k: CONTACT[k] if v is None else v for k, v in params.items()}
+    if not 0 < params["initial_slope_per_n"] < (1 - params["saturated_fraction"]) / 10.0 \
+            or not 0 < params["saturated_fraction"] < 1 or params["crossing_shape"] < 1:
+        _fail("textile_contact", f"needs 0 < saturated_fraction < 1, 0 < initial_slope_per_n < (1 - saturated_fraction) "
+                                 f"/ 10 N and crossing_shape >= 1, got {params}")
+    force = state["patch_force_n"] * state["patch_sensitivity_scale"][None, :]
+    state["patch_conductance_factor"] = 1.0 / normalised_resistance(force, **params)
+
+
 # -- reading effects --------------------------------------------------------------------------
+def _walk(rng, n, width, sd_per_step, recording):
+    """(n, width) random walks with `sd_per_step` steps, restarted (zero) at each recording's first
+    press, whose unloaded frame is taken just before it."""
+    steps = rng.normal(0.0, sd_per_step, (n, width))
+    walk = np.cumsum(steps, axis=0)
+    recording = np.asarray(recording if recording is not None else np.zeros(n, dtype=int))
+    starts = np.flatnonzero(np.r_[True, recording[1:] != recording[:-1]])
+    return walk - np.repeat(walk[starts] - steps[starts], np.diff(np.r_[starts, n]), axis=0)
+
+
+def electrode_contact_impedance(state, rng, resistance_ohm=1000.0, spread=0.3, drift_fraction_per_50_presses=0.05):
+    """Each stitched electrode meets the base fabric through a contact resistance in series
+    (conductive thread through the fabric, silver paste on the point electrodes, seed 002 §3.3).
+    For a point electrode the complete electrode model (Somersalo, Cheney & Isaacson, SIAM J.
+    Appl. Math. 52, 1992) reduces to that series resistance: a reading on an electrode that
+    carries the injected current includes I z_e, the others none. A constant z_e cancels in the
+    change from the unloaded frame; its drift does not. z_e is lognormal over electrodes
+    (`spread`) about `resistance_ohm`, and drifts as a random walk with sd
+    `drift_fraction_per_50_presses` of z_e after 50 presses, restarting per recording. The
+    paper gives no contact resistance; both numbers are our choice (swept in docs/ert.md)."""
+    if resistance_ohm < 0 or spread < 0 or drift_fraction_per_50_presses < 0:
+        _fail("electrode_contact_impedance", f"needs resistance_ohm, spread, drift_fraction_per_50_presses >= 0, got "
+                                             f"{resistance_ohm}, {spread}, {drift_fraction_per_50_presses}")
+    injections, measurements = state["patterns"]
+    n_electrodes = int(max(injections.max(), measurements.max())) + 1
+    z0 = resistance_ohm * np.exp(rng.normal(0.0, spread, n_electrodes))
+    n = len(state["voltage_v"])
+    dz = z0 * _walk(rng, n, n_electrodes, drift_fraction_per_50_presses / np.sqrt(50.0), state.get("recording"))
+    # channel (a, b; c, d) reads I (z_a [c = a] - z_b [c = b] - z_a [d = a] + z_b [d = b])
+    a, b = injections[:, 0:1], injections[:, 1:2]
+    c, d = measurements[None, :, 0], measurements[None, :, 1]
+    weight = np.zeros((len(injections) * len(measurements), n_electrodes))
+    rows = np.arange(weight.shape[0]).reshape(len(injections), len(measurements))
+    for electrode, sign in ((a, 1.0), (b, -1.0)):
+        e = np.broadcast_to(electrode, rows.shape)
+        np.add.at(weight, (rows, e), sign * ((c == e).astype(float) - (d == e).astype(float)))
+    state["voltage_v"] = state["voltage_v"] + state["current_a"] * dz @ weight.T
+
+
 def baseline_drift(state, rng, fraction_per_50_presses=0.0057):
     """The fabric's unloaded resistance wanders: 0.57 % of its initial value over 50 cycles
     (seed 002 §3.2). Each patch's base conductance takes a random walk over the press order
@@ -99,12 +201,8 @@ def baseline_drift(state, rng, fraction_per_50_presses=0.0057):
     if fraction_per_50_presses < 0:
         _fail("baseline_drift", f"fraction_per_50_presses must be >= 0, got {fraction_per_50_presses}")
     jacobian = state["patch_jacobian"]()                      # (n_channels, n_patches)
-    n = len(state["voltage_v"])
-    steps = rng.normal(0.0, fraction_per_50_presses / np.sqrt(50.0), (n, jacobian.shape[1]))
-    walk = np.cumsum(steps, axis=0)
-    recording = np.asarray(state.get("recording", np.zeros(n, dtype=int)))
-    starts = np.flatnonzero(np.r_[True, recording[1:] != recording[:-1]])
-    walk -= np.repeat(walk[starts] - steps[starts], np.diff(np.r_[starts, n]), axis=0)   # restart per recording
+    walk = _walk(rng, len(state["voltage_v"]), jacobian.shape[1], fraction_per_50_presses / np.sqrt(50.0),
+                 state.get("recording"))
     state["voltage_v"] = state["voltage_v"] + walk @ jacobian.T
 
 
@@ -120,8 +218,13 @@ def adc_noise(state, rng, noise_v=2.0e-4, bits=24, full_scale_v=10.0):
         state[key] = np.clip(np.round(noisy / lsb) * lsb, -full_scale_v, full_scale_v)
 
 
-SENSOR_EFFECTS = {"specimen_variation": specimen_variation, "electrode_position_error": electrode_position_error}
-PRESS_EFFECTS = {"foam_spread": foam_spread, "hysteresis": hysteresis, "contact_resistance": contact_resistance}
-READING_EFFECTS = {"baseline_drift": baseline_drift, "adc_noise": adc_noise}
+SENSOR_EFFECTS = {"specimen_variation": specimen_variation, "electrode_position_error": electrode_position_error,
+                  "fabric_anisotropy": fabric_anisotropy}
+PRESS_EFFECTS = {"local_contact": local_contact, "foam_spread": foam_spread, "hysteresis": hysteresis,
+                 "viscoelastic_hysteresis": viscoelastic_hysteresis, "contact_resistance": contact_resistance,
+                 "textile_contact": textile_contact}
+READING_EFFECTS = {"electrode_contact_impedance": electrode_contact_impedance, "baseline_drift": baseline_drift,
+                   "adc_noise": adc_noise}
 EFFECTS = {**SENSOR_EFFECTS, **PRESS_EFFECTS, **READING_EFFECTS}
-RANDOM_EFFECTS = {"specimen_variation", "electrode_position_error", "hysteresis", "baseline_drift", "adc_noise"}
+RANDOM_EFFECTS = {"specimen_variation", "electrode_position_error", "hysteresis", "viscoelastic_hysteresis",
+                  "electrode_contact_impedance", "baseline_drift", "adc_noise"}
