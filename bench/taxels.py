@@ -101,36 +101,17 @@ def summarise(sweep_dir: Path) -> str:
 
 
 def cover_effects() -> str:
-    """The surface structures' signatures, measured on the scene (200 um bonded layer):
-    Fig. 9, mean |gamma_x| per unit pure shear under a 3 mm probe over the array centre, bumps vs
-    flat; Fig. 10c-d, peak |shear along the motion| of a 10 mN load with mu = 0.3 moved across a
-    ridge vs along it (flat cover: both directions); Fig. 6, peak |gamma_x| / peak |eps_z| during a
-    pass over a hair vs over the flat cover."""
-    from data.scenes.taxels import TaxelsScene
-    rng = np.random.default_rng(0)
-    x, y = rng.uniform(-0.3, 0.3, (2, 200))
-    lines = []
-    broad = {"flat (3 mm probe)": {"needle": {"diameter_um": 3000.0, "rings": 6, "points_per_ring": 16}},
-             "bumps (3 mm probe)": {"bump": {"probe_diameter_um": 3000.0}}}
-    response = {}
-    for label, effects in broad.items():
-        frame = TaxelsScene(effects={**effects, "finite_layer": {}}, cover_thickness_um=200.0).simulate(x, y, 0.0, 1.0, 0.0).frame
-        response[label] = float(np.abs(frame.gamma_x_t0).mean())
-        lines.append(f"  Fig. 9  {label:28s} mean |gamma_x| per mN of shear {response[label]:.3e}")
-    lines.append(f"  Fig. 9  bump gain over flat: {response['bumps (3 mm probe)'] / response['flat (3 mm probe)']:.2f}x")
-
-    def peak(effects, direction_deg, component):
-        frame = TaxelsScene(protocol="moving_loads", n_samples=601, effects={**effects, "finite_layer": {}},
-                            directions_deg=[direction_deg], cover_thickness_um=200.0).generate().frame
-        return float(np.abs(frame[component]).max())
-    for label, effects in (("flat", {}), ("ridge along x", {"ridge": {"orientation_deg": 0.0}})):
-        across, along = peak(effects, 90.0, "gamma_y_t0"), peak(effects, 0.0, "gamma_x_t0")
-        lines.append(f"  Fig. 10 {label:28s} peak shear, motion across (y) {across:.4f}, "
-                     f"along (x) {along:.4f}, ratio {across / along:.2f}")
-    for label, effects in (("flat", {}), ("hair", {"hair": {}})):
-        ratio = peak(effects, 0.0, "gamma_x_t0") / peak(effects, 0.0, "eps_z_t0")
-        lines.append(f"  Fig. 6  {label:28s} peak |gamma_x| / peak |eps_z| = {ratio:.2f}")
-    return "\n".join(lines)
+    """The surface structures' signatures, measured by the fidelity rows on the variants
+    taxels_bump, taxels_ridge, taxels_hair (runs/fidelity/taxels.py): Fig. 9, bumps vs flat under
+    a 3 mm probe; Fig. 10c-d, the ridge's direction selectivity; Fig. 6, the hair's shear ratio."""
+    from runs.fidelity import taxels as rows
+    from runs.fidelity.observations import scene_params
+    probe = rows.TaxelsProbe(scene_params("taxels"), repeats=3)
+    hair = rows.hair_shear_ratio(probe)
+    return "\n".join([
+        f"  Fig. 9  {rows.bump_raises_lateral_sensitivity(probe).value}",
+        f"  Fig. 10 {rows.ridge_direction_selective(probe).value}",
+        f"  Fig. 6  peak |gamma_x| / peak |eps_z| of a moving load: hair {hair['hair']:.2f}, flat {hair['flat']:.2f}"])
 
 
 def main(argv=None):

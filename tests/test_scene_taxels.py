@@ -107,6 +107,56 @@ def test_finite_layer_scene_slopes_against_thickness():
         assert laws["a_exponent"] == pytest.approx(exponent, rel=0.01)
 
 
+def membrane(side_um, points_per_side=4):
+    return {"needle": {"diameter_um": 100.0}, "plate_averaging": {"points_per_side": points_per_side,
+                                                                  "side_um": side_um}, "flat": {}}
+
+
+def membrane_features(side_um, thickness=(150.0, 400.0, 1000.0), points_per_side=4):
+    """The ratio and shear sensitivity at 180 um, and the W slope and A exponent over `thickness`."""
+    x, eps, centre = needle_profile(membrane(side_um, points_per_side), 180.0, n_points=801)
+    fig2 = profile_metrics(x, eps, centre)
+    rows = [profile_metrics(*needle_profile(membrane(side_um, points_per_side), t, n_points=801)) for t in thickness]
+    laws = fit_laws(thickness, [r["width_mm"] for r in rows], [r["amplitude"] for r in rows])
+    scene = TaxelsScene(protocol="needle_scan", n_samples=801, effects=membrane(side_um, points_per_side),
+                        cover_thickness_um=180.0, scan_range_mm=(-0.75 - 0.72, -0.75 + 0.72))
+    frame = scene.generate().frame
+    shear = np.abs(frame.gamma_x_t0).max() / np.abs(frame.eps_z_t0).max()
+    return {"ratio": fig2["ratio"], "shear": shear, **laws}
+
+
+def test_membrane_averaging_moves_toward_the_measurement():
+    """Eq. (1)'s strain averaged over the taxel's membrane (the default's mechanics): the larger the
+    membrane, the stronger the lateral inhibition, the flatter the amplitude law and the narrower
+    the field (the paper's direction for all three), while the shear sensitivity rises (away from
+    it). At the default 350 um the ratio and exponent fall within the paper's tolerances."""
+    point = {"ratio": 5**2.5, "shear": 0.75 * 0.8**2.5, "w_slope": 2 * np.sqrt(2), "a_exponent": -2.0}
+    small, default, large = (membrane_features(side) for side in (100.0, 350.0, 500.0))
+    for key in ("ratio", "w_slope"):
+        assert point[key] > small[key] > default[key] > large[key]
+    assert point["a_exponent"] < small["a_exponent"] < default["a_exponent"] < large["a_exponent"]
+    assert point["shear"] < small["shear"] < default["shear"] < large["shear"]
+    assert 19.0 * 0.7 < default["ratio"] < 19.0 * 1.3
+    assert abs(default["a_exponent"] + 1.45) < 0.25
+    assert 1.14 < default["w_slope"] < 0.97 * 2 * np.sqrt(2)
+
+
+def test_membrane_quadrature_has_converged():
+    """4 x 4 Gauss points (the default) against 12 x 12 on the 350 um membrane."""
+    coarse, fine = membrane_features(350.0, (150.0, 1000.0)), membrane_features(350.0, (150.0, 1000.0), 12)
+    for key in ("ratio", "w_slope", "a_exponent"):
+        assert coarse[key] == pytest.approx(fine[key], rel=0.02)
+
+
+def test_plate_averaging_defaults_to_the_plate():
+    scene = TaxelsScene(effects={"plate_averaging": {"points_per_side": 3}, "flat": {}})
+    same = TaxelsScene(effects={"plate_averaging": {"points_per_side": 3, "side_um": 100.0}, "flat": {}})
+    other = TaxelsScene(effects={"plate_averaging": {"points_per_side": 3, "side_um": 350.0}, "flat": {}})
+    args = ([-0.5, 0.1], [-0.7, 0.3], 5.0, 0.5, -0.2)
+    np.testing.assert_array_equal(scene.simulate(*args).channels, same.simulate(*args).channels)
+    assert not np.allclose(scene.simulate(*args).channels, other.simulate(*args).channels)
+
+
 def test_base_strain_kernels_obey_incompressibility():
     """At nu = 0.5 a bonded face cannot strain (eps_zz = 0), and just above it d eps_zz/dz =
     -div(tau) / G, tau the base shear traction (checked by finite differences of tau); on a
@@ -251,6 +301,9 @@ def test_base_scene_reads_nothing(compose_config):
     assert np.all(table.channels == 0)
 
 
+LAYER = ["~scene.effects.flat", "+scene.effects.finite_layer={}"]   # the default chain on the finite layer
+
+
 @pytest.mark.parametrize("overrides, message", [
     (["+scene.effects.velvet={}"], "unknown effect 'velvet'"),
     (["scene.cover_thickness_um=0"], "thickness"),
@@ -259,15 +312,17 @@ def test_base_scene_reads_nothing(compose_config):
     (["scene.poisson_ratio=0"], "poisson_ratio"),
     (["scene.protocol=tapping"], "protocol"),
     (["scene.thickness_series_um=[100,0]"], "thickness"),
-    (["+scene.effects.flat={}"], "list only one"),
+    (["+scene.effects.finite_layer={}"], "list only one"),
     (["+scene.effects.bump={}", "+scene.effects.ridge={}"], "list only one"),
     (["+scene.effects.bump={diameter_um: 2000}"], "pitch"),
     (["scene.pitch_mm=-1"], "pitch_mm"),
-    (["scene.effects.finite_layer.interface=glued"], "interface"),
-    (["scene.effects.finite_layer.interface=frictionless"], "cannot carry a shear load"),
-    (["scene.effects.finite_layer.sensing=cover_strain"], "does not strain"),
-    (["+scene.effects.finite_layer.sensing_height_um=10"], "sensing_height_um"),
-    (["scene.effects.finite_layer.sensing=cover_strain", "+scene.effects.finite_layer.sensing_height_um=600"],
+    (["scene.effects.plate_averaging.side_um=0"], "side_um"),
+    (["scene.effects.plate_averaging.side_um=-350"], "side_um"),
+    (LAYER + ["+scene.effects.finite_layer.interface=glued"], "interface"),
+    (LAYER + ["+scene.effects.finite_layer.interface=frictionless"], "cannot carry a shear load"),
+    (LAYER + ["+scene.effects.finite_layer.sensing=cover_strain"], "does not strain"),
+    (LAYER + ["+scene.effects.finite_layer.sensing_height_um=10"], "sensing_height_um"),
+    (LAYER + ["+scene.effects.finite_layer.sensing=cover_strain", "+scene.effects.finite_layer.sensing_height_um=600"],
      "below the cover thickness"),
 ])
 def test_bad_input_is_one_line(compose_config, overrides, message):
@@ -311,7 +366,7 @@ def test_receptive_field_study_writes_its_figures(compose_config, tmp_path):
                           "study.n_points=201", "~study.models.scene", "~study.models.half_space_real",
                           "~study.models.bonded_layer_real", "~study.models.bonded_layer",
                           "~study.models.frictionless_strain", "~study.models.bonded_cover_strain",
-                          "~study.models.frictionless_layer",
+                          "~study.models.membrane",
                           "~study.models.frictionless_strain_real", "~study.models.bonded_cover_strain_real"])
     metrics = run(cfg, tmp_path)
     for name in ("receptive_field.png", "thickness.png", "thickness.csv", "profiles.csv", "metrics.json"):

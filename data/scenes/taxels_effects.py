@@ -69,15 +69,20 @@ def needle(state, diameter_um=100.0, rings=1, points_per_ring=8):
         state[key] = state[key] * w
 
 
-def plate_averaging(state, points_per_side=2):
-    """A taxel's bridges sit around a plate of side `plate_side_um`, not at one point: the strain
-    is averaged over the plate by Gauss-Legendre quadrature (points_per_side^2 points). This is
-    the length scale besides the cover thickness that the real geometry adds (seed 004 sec. 5
-    puts the narrower, flatter measured profiles down to the real geometry)."""
-    if points_per_side < 1:
-        raise InputError(f"scene taxels: plate_averaging needs points_per_side >= 1, got {points_per_side}")
+def plate_averaging(state, points_per_side=2, side_um=None):
+    """A taxel's bridges sit around a plate, not at one point: the strain is averaged over a
+    square of side `side_um` (default: the plate, `plate_side_um`) by Gauss-Legendre quadrature
+    (points_per_side^2 points). The plate and its four bridges form one suspended membrane over
+    the etched cavity (seed 004 sec. 2, Fig. 1), and the rubber coats and infiltrates all of it,
+    so `side_um` may be the whole membrane's: the length besides the cover thickness that the real
+    geometry adds (seed 004 sec. 5 puts the narrower, flatter measured profiles down to the real
+    geometry). The area that turns strain into force for the bridge constants stays the plate's."""
+    side = state["geometry"]["plate_side_um"] if side_um is None else side_um
+    if points_per_side < 1 or not (np.isfinite(side) and side > 0):
+        raise InputError(f"scene taxels: plate_averaging needs points_per_side >= 1 and side_um > 0, "
+                         f"got {points_per_side}, {side_um}")
     nodes, weights = np.polynomial.legendre.leggauss(int(points_per_side))
-    half = 0.5e-6 * state["geometry"]["plate_side_um"]
+    half = 0.5e-6 * side
     gx, gy = np.meshgrid(nodes * half, nodes * half)
     state["sensing_offsets_m"] = np.column_stack([gx.ravel(), gy.ravel()])
     state["sensing_weights"] = np.outer(weights, weights).ravel() / 4.0

@@ -18,15 +18,16 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from common.atomic import atomic_write_text
+from data.scenes.taxels import TaxelsScene
 from runs.report.figure_files import write_figures
 from runs.report.plots import panel_grid, readable_log_axis
 
 PAPER = {"w_slope": 1.14, "a_exponent": -1.45, "ratio": 19.0}
-THEORY = {"w_slope": 2.0 * np.sqrt(2.0), "a_exponent": -2.0, "ratio": 5.0**2.5}
+THEORY = {"w_slope": 2.0 * np.sqrt(2.0), "a_exponent": -2.0, "ratio": 5.0**2.5,
+          "shear_sensitivity": 0.75 * 0.8**2.5}
 
 
 def _crossing(x, y, index_from, index_to):
@@ -85,25 +86,30 @@ def fit_laws(thickness_um, width_mm, amplitude) -> dict:
     return {"w_slope": slope, "a_exponent": exponent}
 
 
-def _scene(cfg, effects: dict, **overrides):
-    node = OmegaConf.to_container(cfg.scene, resolve=True)
-    node.update(overrides)
-    node["effects"] = effects
-    return instantiate(node)
-
-
-def _needle_profile(cfg, effects, thickness_um, n_points, force_mn):
-    """Scan one taxel's row; returns x (mm), the eq.-(2) strains of taxel 0 (n, 3), its x."""
-    base = _scene(cfg, effects, protocol="needle_scan", n_samples=n_points, cover_thickness_um=thickness_um,
-                  needle_force_mn=force_mn)
-    centre = base.taxel_xy_mm()[0, 0]
+def needle_profile(params: dict, effects: dict, thickness_um: float, n_points: int, force_mn: float):
+    """Scan a needle along taxel 0's row, +/- 4 thicknesses (at least 1 mm) around it, on the taxels
+    scene `params` (its config as a dict) with `effects`. Returns x (mm), taxel 0's strains read
+    back from its bridges with eq. (2) (n, 3: gamma_x, gamma_y, eps_z; through whatever reading
+    effects are listed), the same without the reading chain (the scene's noise-free strain
+    columns), and the taxel's x."""
+    node = {k: v for k, v in params.items() if k not in ("_target_", "_convert_", "effects")}
+    node.update(protocol="needle_scan", n_samples=n_points, cover_thickness_um=thickness_um,
+                needle_force_mn=force_mn)
+    scene = TaxelsScene(**node, effects=effects)
+    centre = scene.taxel_xy_mm()[0, 0]
     reach = max(4.0 * thickness_um * 1e-3, 1.0)
-    base.scan_range_mm = (centre - reach, centre + reach)
-    table = base.generate()
-    bridges = table.channels
-    gain = effects.get("amplifier", {}).get("gain", 1.0) if "amplifier" in effects else 1.0
-    strain = base.strain_from_bridges(bridges / gain)[:, 0, :]
-    return table.frame["x_mm"].to_numpy(), strain, centre
+    scene.scan_range_mm = (centre - reach, centre + reach)
+    table = scene.generate()
+    gain = effects["amplifier"].get("gain", 55.0) if "amplifier" in effects else 1.0
+    read_back = scene.strain_from_bridges(table.channels / gain)[:, 0, :]
+    exact = table.frame[["gamma_x_t0", "gamma_y_t0", "eps_z_t0"]].to_numpy()
+    return table.frame["x_mm"].to_numpy(), read_back, exact, centre
+
+
+def shear_sensitivity(strain) -> float:
+    """The taxels paper's sec. 7 measure on a normal needle scan: max |gamma_x| / max |eps_z|
+    (eq. 1 gives (3/4) (4/5)^(5/2) = 0.429 at any depth)."""
+    return float(np.abs(strain[:, 0]).max() / np.abs(strain[:, 2]).max())
 
 
 def run_receptive_field(cfg, output_dir, logger, models: dict, thickness_um: list, fig2_thickness_um: float = 180.0,
@@ -113,17 +119,18 @@ def run_receptive_field(cfg, output_dir, logger, models: dict, thickness_um: lis
     models = {label: OmegaConf.to_container(e, resolve=True) if not isinstance(e, dict) else e
               for label, e in models.items()}
     thickness_um = [float(t) for t in thickness_um]
+    params = OmegaConf.to_container(cfg.scene, resolve=True)
 
     rows, profiles = [], []
     for label, effects in models.items():
         for z in thickness_um:
-            x, strain, centre = _needle_profile(cfg, effects, z, n_points, force_mn)
+            x, strain, _, centre = needle_profile(params, effects, z, n_points, force_mn)
             rows.append({"model": label, "thickness_um": z, **profile_metrics(x, strain[:, 2], centre)})
-        x, strain, centre = _needle_profile(cfg, effects, fig2_thickness_um, n_points, force_mn)
+        x, strain, _, centre = needle_profile(params, effects, fig2_thickness_um, n_points, force_mn)
         profiles.append(pd.DataFrame({"model": label, "x_mm": x - centre, "gamma_x": strain[:, 0],
                                       "gamma_y": strain[:, 1], "eps_z": strain[:, 2]}))
         rows.append({"model": label, "thickness_um": fig2_thickness_um, "fig2": True,
-                     **profile_metrics(x, strain[:, 2], centre)})
+                     **profile_metrics(x, strain[:, 2], centre), "shear_sensitivity": shear_sensitivity(strain)})
     table = pd.DataFrame(rows)
     table["fig2"] = table.get("fig2", False)
     table["fig2"] = table["fig2"].astype("boolean").fillna(False).astype(bool)
@@ -135,7 +142,8 @@ def run_receptive_field(cfg, output_dir, logger, models: dict, thickness_um: lis
         laws = fit_laws(series.thickness_um, series.width_mm, series.amplitude)
         fig2 = table[(table.model == label) & table.fig2].iloc[0]
         metrics[label] = {**laws, "ratio_fig2": float(fig2.ratio), "width_fig2_mm": float(fig2.width_mm),
-                          "amplitude_fig2": float(fig2.amplitude)}
+                          "amplitude_fig2": float(fig2.amplitude),
+                          "shear_sensitivity_fig2": float(fig2.shear_sensitivity)}
 
     figures = {"receptive_field": _profile_figure(profiles, fig2_thickness_um, force_mn),
                "thickness": _thickness_figure(table[~table.fig2], metrics)}
