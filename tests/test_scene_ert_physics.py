@@ -127,3 +127,29 @@ def test_textile_contact_and_viscoelastic_hysteresis_in_the_scene():
 def test_impossible_parameters_are_one_line_errors(effects):
     with pytest.raises(InputError, match="scene ert: effect"):
         scene(effects).simulate(np.array([[100.0, 100.0, 8.0]]))
+
+
+# -- SVD-optimal injection: scores that do not depend on the SVD's basis -------------------------
+def test_leading_subspace_scores_tie_whole_symmetry_orbits():
+    from data.physics.optimal_injection import perturbation_operator, recruit_pairs
+    from data.physics.sheet_conduction import PatchUpdateSolver
+    from data.scenes.ert import patch_weights
+    ring = np.array([[20, 120], [60, 120], [100, 120], [120, 100], [120, 60], [120, 20], [100, 0], [60, 0], [20, 0],
+                     [0, 20], [0, 60], [0, 100]], dtype=float)
+    grid = SheetGrid(120.0, 25, ring, 0.0)
+    solver = PatchUpdateSolver(SheetSolver(grid), 5e-5)
+    op = perturbation_operator(solver.transfer_resistance_jacobian(patch_weights(grid.node_xy_mm, 120.0, 20.0)))
+    index = {tuple(p): k for k, p in enumerate(ring)}
+    symmetries = [lambda p: p, lambda p: [120 - p[0], p[1]], lambda p: [p[0], 120 - p[1]], lambda p: [p[1], p[0]]]
+
+    def closed(group):
+        pairs = {tuple(sorted(p)) for p in group.tolist()}
+        return all(tuple(sorted((index[tuple(g(ring[a]))], index[tuple(g(ring[b]))]))) in pairs
+                   for a, b in pairs for g in symmetries)
+    subspace = recruit_pairs(op, 12, max_iterations=2, tie_tolerance=1e-6, score="leading_subspace")
+    assert all(closed(group) for group in subspace.pairs_per_iteration)
+    # the earlier score splits an orbit: its second group holds half of one
+    basis = recruit_pairs(op, 12, max_iterations=2, tie_tolerance=1e-6, score="singular_vector")
+    assert not closed(basis.pairs_per_iteration[1])
+    with pytest.raises(ValueError):
+        recruit_pairs(op, 12, max_iterations=1, score="best")

@@ -39,13 +39,14 @@ ORDER_NAMES = {"optimal": "in recruitment order", "random": "in a random order",
 PAPER = {"pairs_recruited": 94, "iterations": 8, "operator_error_reduction_pct": 73.45}
 
 
-def recruitment_for(scene, max_iterations: int, tie_tolerance: float):
+def recruitment_for(scene, max_iterations: int, tie_tolerance: float, score: str = "leading_subspace"):
     """Recruitment on the scene's nominal sensor (no sensor effects)."""
     nominal = scene_for_nominal(scene)
     solver = nominal._solver(nominal.sensor())
     weights = patch_weights(solver.solver.grid.node_xy_mm, nominal.side_mm, nominal.patch_mm)
     operator = perturbation_operator(solver.transfer_resistance_jacobian(weights))
-    return recruit_pairs(operator, nominal.n_electrodes, max_iterations=max_iterations, tie_tolerance=tie_tolerance)
+    return recruit_pairs(operator, nominal.n_electrodes, max_iterations=max_iterations, tie_tolerance=tie_tolerance,
+                         score=score)
 
 
 def scene_for_nominal(scene):
@@ -53,13 +54,13 @@ def scene_for_nominal(scene):
     return scene
 
 
-def run_injection(cfg, output_dir, logger, seeds=(0, 1, 2), max_iterations=300, tie_tolerance=1e-6,
+def run_injection(cfg, output_dir, logger, seeds=(0, 1, 2), max_iterations=300, tie_tolerance=1e-6, score="leading_subspace",
                   pair_counts=(12, 24, 48, 94, 138, 276), switching_hz=333e3, test_force_n=10.0,
                   calibration=None, reconstruction=None) -> dict:
     output_dir = Path(output_dir)
     calibration, reconstruction = _plain(calibration) or {}, _plain(reconstruction) or {}
     scene = scene_for(cfg, injection="all")
-    recruitment = recruitment_for(scene_for(cfg, injection="all"), max_iterations, tie_tolerance)
+    recruitment = recruitment_for(scene_for(cfg, injection="all"), max_iterations, tie_tolerance, score)
     order = recruitment.order
     per_iteration = pd.DataFrame({"iteration": np.arange(1, len(recruitment.error_per_iteration) + 1),
                                   "pairs": recruitment.count_per_iteration,
