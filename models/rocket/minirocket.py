@@ -67,7 +67,7 @@ class DilationGroup(nn.Module):
 
     def __init__(self, n_channels: int, length: int, dilations: list[int], first_index: int, count: int):
         super().__init__()
-        self.n_channels, self.count = n_channels, count
+        self.n_channels, self.count, self.dilations = n_channels, count, list(dilations)
         d = torch.tensor(dilations)
         shifts = (torch.arange(KERNEL_LENGTH) - KERNEL_LENGTH // 2)[None, :, None] * d[:, None, None]
         self.padding = 4 * max(dilations)

@@ -1,0 +1,185 @@
+"""The ROCKET family (models/rocket/): the transform against an explicit convolution with the 84
+kernels, the ridge head's leave-one-out against refits, the estimator contract, and the exported
+graph against the eager pipeline."""
+import itertools
+
+import numpy as np
+import onnxruntime as ort
+import pytest
+import torch
+from sklearn.base import clone
+from sklearn.utils.estimator_checks import check_no_attributes_set_in_init, check_parameters_default_constructible
+
+from common.errors import InputError
+from export.pipelines import export_pipeline
+from models.deployable import TimeSeriesPipeline, load_pipeline, save_pipeline
+from models.rocket.classifier import RocketClassifier
+from models.rocket.minirocket import MiniRocket, dilations_and_features, quantiles
+from models.rocket.ridge_loo import ALPHAS, class_indicators, ridge_loo
+
+
+def explicit_kernels() -> torch.Tensor:
+    """The paper's 84 kernels as weights: -1 everywhere, +2 at each choice of three of nine positions."""
+    weights = -torch.ones(84, 1, 9, dtype=torch.float64)
+    for k, positions in enumerate(itertools.combinations(range(9), 3)):
+        weights[k, 0, list(positions)] = 2.0
+    return weights
+
+
+def explicit_features(module: MiniRocket, x: np.ndarray):
+    """PPV features computed the slow way: a dilated conv1d per channel with the explicit kernels,
+    summed over each kernel's channel combination, pooled over the whole output or its inner part
+    (alternating from the first dilation), one feature per bias, in the module's order; and where
+    an output lies so close to a bias that float32 rounding may put it on either side (a constant
+    window's outputs are all zero: exactly in float64, within rounding in float32)."""
+    x64 = torch.from_numpy(x.astype(np.float64))
+    features, ties, index = [], [], 0
+    for group in module.groups:
+        for j in range(group.biases.shape[0]):
+            i, d = index + j, module.dilations[index + j]
+            per_channel = torch.stack([torch.nn.functional.conv1d(x64[:, c:c + 1], explicit_kernels(), dilation=d,
+                                                                  padding=4 * d) for c in range(x.shape[1])], 1)
+            mask = group.channel_mask[:, j, :, 0].double()                    # [channels, 84]
+            outputs = (per_channel * mask[None, :, :, None]).sum(1)            # [n, 84, length]
+            for k in range(84):
+                values = outputs[:, k] if (i + k) % 2 == 0 else outputs[:, k, 4 * d:outputs.shape[-1] - 4 * d]
+                for b in group.biases[j, k, :, 0].double():
+                    features.append((values > b).double().mean(-1))
+                    ties.append(((values - b).abs() <= 1e-5 * (1 + outputs.abs().max())).any(-1))
+        index += group.biases.shape[0]
+    return torch.stack(features, 1).numpy(), torch.stack(ties, 1).numpy()
+
+
+def fitted(X, y, **settings) -> RocketClassifier:
+    return RocketClassifier(**settings).fit(X, y)
+
+
+@pytest.mark.parametrize("n_channels, length, scale", [(1, 9, 1.0), (1, 40, 1e-6), (3, 31, 1e6), (2, 64, 1.0)])
+def test_shifted_sums_equal_an_explicit_convolution_with_the_84_kernels(n_channels, length, scale):
+    rng = np.random.default_rng(length)
+    X = scale * rng.standard_normal((6, n_channels, length)).cumsum(-1)
+    X[0] = 3.0 * scale                                   # a constant window
+    model = fitted(X, np.arange(6) % 2, n_features=840)
+    x = model._scaled(X)
+    with torch.no_grad():
+        for group in model.module_.groups:
+            shared = group.convolutions(torch.from_numpy(x)).numpy()
+            for j, d in enumerate(group.dilations):
+                explicit = torch.stack([torch.nn.functional.conv1d(torch.from_numpy(x[:, c:c + 1]).double(),
+                                                                   explicit_kernels(), dilation=d, padding=4 * d)
+                                        for c in range(n_channels)], 1)
+                mask = group.channel_mask[:, j, :, 0].double()              # [channels, 84]
+                expected = (explicit * mask[None, :, :, None]).sum(1).numpy()
+                np.testing.assert_allclose(shared[:, j], expected, atol=1e-4 * np.abs(expected).max() + 1e-5)
+    features = model.transform(X)
+    assert features.shape == (6, model.module_.n_features)
+    expected, ties = explicit_features(model.module_, x)
+    np.testing.assert_allclose(features[~ties], expected[~ties], atol=1e-6)
+    assert ties[1:].mean() < 0.01          # ties are rare off the constant window
+
+
+def test_dilations_follow_the_paper():
+    dilations, counts = dilations_and_features(1460, 10_000)
+    assert dilations[0] == 1 and dilations[-1] == 182 and sum(counts) == 119 and len(dilations) <= 32
+    assert dilations == sorted(set(dilations))
+    assert dilations_and_features(9, 10_000) == ([1], [119])
+    np.testing.assert_allclose(quantiles(3), [0.6180339887, 0.2360679775, 0.8541019662], atol=1e-9)
+
+
+def test_non_finite_and_short_windows_are_refused():
+    X = np.random.default_rng(0).standard_normal((4, 1, 20))
+    X[1, 0, 3] = np.nan
+    with pytest.raises(InputError, match="finite"):
+        fitted(X, np.arange(4) % 2)
+    with pytest.raises(InputError, match="at least 9 steps"):
+        fitted(np.ones((4, 1, 8)), np.arange(4) % 2)
+    with pytest.raises(InputError, match="n_features"):
+        fitted(np.ones((4, 1, 20)), np.arange(4) % 2, n_features=10)
+
+
+def brute_force_loo(X, Y, alpha):
+    """Each sample predicted by ridge (unpenalised intercept) refitted without it."""
+    predictions = []
+    for i in range(len(X)):
+        keep = np.arange(len(X)) != i
+        x_mean, y_mean = X[keep].mean(0), Y[keep].mean(0)
+        Xc = X[keep] - x_mean
+        coef = np.linalg.solve(Xc.T @ Xc + alpha * np.eye(X.shape[1]), Xc.T @ (Y[keep] - y_mean))
+        predictions.append(y_mean + (X[i] - x_mean) @ coef)
+    return np.array(predictions)
+
+
+@pytest.mark.parametrize("n, n_features", [(12, 30), (25, 6)])
+def test_ridge_leave_one_out_equals_refits_without_each_sample(n, n_features):
+    rng = np.random.default_rng(n)
+    X = rng.standard_normal((n, n_features))
+    Y = class_indicators(rng.integers(0, 3, n), 3)
+    fit = ridge_loo(X, Y)
+    brute = [((Y - brute_force_loo(X, Y, a)) ** 2).sum() for a in ALPHAS]
+    np.testing.assert_allclose(fit.loo_errors, brute, rtol=1e-8)
+    np.testing.assert_allclose(fit.loo_predictions, brute_force_loo(X, Y, fit.alpha), rtol=1e-8, atol=1e-10)
+    assert fit.alpha == ALPHAS[int(np.argmin(brute))]
+    Xc = X - X.mean(0)
+    coef = np.linalg.solve(Xc.T @ Xc + fit.alpha * np.eye(n_features), Xc.T @ (Y - Y.mean(0)))
+    np.testing.assert_allclose(fit.coef, coef, rtol=1e-7, atol=1e-10)
+    np.testing.assert_allclose(fit.intercept, Y.mean(0) - X.mean(0) @ coef, rtol=1e-7, atol=1e-10)
+
+
+def tones(n_per_class=10, length=60, n_channels=2, seed=0):
+    """Three classes told apart by a tone's frequency in the first channel (the others noise)."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(length) / 20
+    y = np.repeat(np.arange(3), n_per_class)
+    X = rng.standard_normal((len(y), n_channels, length))
+    X[:, 0] += np.sin(2 * np.pi * (1 + y[:, None]) * t + rng.uniform(0, 6, (len(y), 1)))
+    return X, y
+
+
+@pytest.mark.parametrize("head", ["ridge", "logistic"])
+def test_both_heads_learn_and_give_probabilities(head):
+    X, y = tones()
+    X_test, y_test = tones(seed=1)
+    model = fitted(X, y, head=head, n_features=2000)
+    proba = model.predict_proba(X_test)
+    np.testing.assert_allclose(proba.sum(1), 1.0, rtol=1e-5)
+    assert (proba.argmax(1) == y_test).mean() >= 0.8
+    assert model.head_ == head
+    binary = fitted(X[y < 2], y[y < 2], head=head, n_features=2000)
+    assert binary.predict_proba(X_test).shape == (len(X_test), 2)
+    assert (binary.predict(X_test[y_test < 2]) == y_test[y_test < 2]).mean() >= 0.8
+
+
+def test_auto_head_switches_by_the_number_of_training_windows():
+    X, y = tones()
+    assert fitted(X, y, n_features=168, ridge_max_samples=len(X)).head_ == "ridge"
+    assert fitted(X, y, n_features=168, ridge_max_samples=len(X) - 1).head_ == "logistic"
+
+
+def test_estimator_contract_and_seed():
+    check_no_attributes_set_in_init("RocketClassifier", RocketClassifier())
+    check_parameters_default_constructible("RocketClassifier", RocketClassifier())
+    X, y = tones()
+    model = RocketClassifier(n_features=840, seed=3)
+    assert model.fit(X, y) is model
+    again = clone(model).fit(X, y)
+    np.testing.assert_array_equal(model.transform(X), again.transform(X))
+    np.testing.assert_array_equal(model.predict_proba(X), again.predict_proba(X))
+    other = RocketClassifier(n_features=840, seed=4).fit(X, y)
+    assert not np.array_equal(model.transform(X), other.transform(X))
+
+
+def test_the_exported_graph_equals_the_eager_pipeline_and_survives_the_fitted_state_file(tmp_path):
+    X, y = tones(length=80)
+    model = fitted(X, y, n_features=1000)
+    raw = 50.0 + 20.0 * X.repeat(2, axis=-1)                   # raw windows at twice the rate, offset and scaled
+    pipeline = TimeSeriesPipeline(["a", "b"], ["low", "mid", "high"], None, 2, 80,
+                                  np.full((1, 2, 1), 50.0), np.full((1, 2, 1), 20.0), model)
+    saved = load_pipeline(save_pipeline(pipeline, tmp_path / "pipeline.npz"))
+    eager = pipeline.predict_raw(raw)
+    np.testing.assert_array_equal(saved.predict_raw(raw), eager)
+    proto = export_pipeline(pipeline, 17, "test")
+    assert {n.op_type for n in proto.graph.node}.isdisjoint({"Conv", "ConvTranspose"})
+    session = ort.InferenceSession(proto.SerializeToString(), providers=["CPUExecutionProvider"])
+    onnx_proba = session.run(None, {"window": raw.astype(np.float32)})[0]
+    np.testing.assert_allclose(onnx_proba, eager, atol=1e-4)
+    assert (onnx_proba.argmax(1) == y).mean() == (eager.argmax(1) == y).mean()
