@@ -52,19 +52,20 @@ def compare_patterns(config: str, overrides, repeats: int) -> str:
     """The sensitivity rows (4, 5), the mirror row (6) and the forest's x, y R^2 (11) for each
     readout pattern on the same scene."""
     lines = [("| readout | channels | sensitivity per mm: corners / edge mid / centre (row 4) | "
-              "P5 span / best span (row 5) | mirror ambiguity edge / centre (row 6) | R² x, y (row 11) | "
+              "P5 span / best span (row 5) | mirror ambiguity edge / centre (row 6) | R² x, y (row 11, 3 hold-outs) | "
               f"R² x / y / depth, random presses ({RANDOM_PRESSES}, seeds 0-2, mean ± sd) |"),
              "|---|---|---|---|---|---|---|"]
     params = scene_params(config, overrides)
     for name, pattern in PATTERNS.items():
         probe = SceneProbe({**params, "measurement": pattern}, repeats=repeats)
         four, five = corners_least_sensitive(probe).numbers, centre_widest_range(probe).numbers
-        six, r2 = mirror_ambiguity_worst_at_edges(probe).numbers, extra_trees_r2(probe).numbers["r2"]
+        six, r2 = mirror_ambiguity_worst_at_edges(probe).numbers, extra_trees_r2(probe).numbers
         corner_mean = _mean_corners(probe)
         lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {100 * corner_mean:.2f} / "
                      f"{100 * four['edge_mean']:.2f} / {100 * four['centre']:.2f} % | "
                      f"{five['range'][4] / max(five['range']):.2f} | {six['edge']:.3f} / {six['centre']:.3f} | "
-                     f"{r2[0]:.3f}, {r2[1]:.3f} | {_random_press_r2(params, pattern)} |")
+                     f"{r2['r2'][0]:.3f} ± {r2['r2_sd'][0]:.3f}, {r2['r2'][1]:.3f} ± {r2['r2_sd'][1]:.3f} | "
+                     f"{_random_press_r2(params, pattern)} |")
     return "\n".join(lines)
 
 
