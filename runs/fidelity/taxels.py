@@ -22,6 +22,8 @@ from functools import cached_property
 
 import numpy as np
 
+from data.scenes.taxels import TaxelsScene
+from data.scenes.taxels_effects import READING_EFFECTS
 from runs.fidelity.observations import Measured, observation, probe, scene_params
 from runs.studies.taxel_receptive_field import (PAPER, THEORY, fit_laws, needle_profile, profile_metrics,
                                                 shear_sensitivity)
@@ -31,7 +33,6 @@ FIG4_THICKNESS_UM = (150.0, 200.0, 300.0, 400.0, 580.0, 700.0, 850.0, 1000.0)  #
 NEEDLE_FORCE_MN = 10.0
 SCAN_POINTS = 1201
 RATIO_TOLERANCE = 0.30
-READING_EFFECTS = ("amplifier", "noise", "adc")
 
 
 def _spread(values) -> tuple[float, float]:
@@ -85,7 +86,7 @@ class TaxelsProbe:
 
 
 def _scene(params: dict, **overrides):
-    from data.scenes.taxels import TaxelsScene
+    """The scene without its reading chain: the structure rows read the noise-free strain columns."""
     node = {**params, **overrides}
     node["effects"] = {k: v for k, v in (node.get("effects") or {}).items() if k not in READING_EFFECTS}
     return TaxelsScene(**node)
