@@ -1,0 +1,69 @@
+"""Which physics makes the ERT skin's boundary electrodes worse than internal ones (seed 002, issue 28
+item 4): the paper's single-point protocol (runs/fidelity/ert.py `single_point_protocol`) on both
+layouts for each physics variant, over seeds; optionally the two-point test. One JSON line per
+variant and layout to --out, a table on stdout.
+
+    OMP_NUM_THREADS=1 .venv/bin/python bench/textile_layout_physics.py --out /tmp/layout.jsonl
+    OMP_NUM_THREADS=1 .venv/bin/python bench/textile_layout_physics.py --variants today local_contact --two-point
+"""
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from runs.fidelity.ert import LAYOUTS, layout_variant, single_point_protocol, two_point_protocol  # noqa: E402
+
+PHYSICAL = {"local_contact": {}, "textile_contact": {}, "viscoelastic_hysteresis": {}}
+VARIANTS = {
+    "today": ({}, (), {}),
+    "local_contact": ({"local_contact": {}}, (), {}),
+    "contact_impedance_1k_5pct": ({"electrode_contact_impedance": {}}, (), {}),
+    "contact_impedance_5k_20pct": ({"electrode_contact_impedance": {"resistance_ohm": 5000.0,
+                                                                    "drift_fraction_per_50_presses": 0.2}}, (), {}),
+    "anisotropy_2": ({"fabric_anisotropy": {"ratio": 2.0}}, (), {}),
+    "electrode_width_10mm": ({}, (), {"electrode_width_mm": 10.0}),
+    "noise_x5": ({"adc_noise": {"noise_v": 1.0e-3, "bits": 24, "full_scale_v": 10.0}}, (), {}),
+    "textile_physics": (PHYSICAL, ("contact_resistance", "hysteresis"), {}),
+    "inhomogeneous_30pct": ({"specimen_variation": {"base_resistance_spread": 0.3, "sensitivity_spread": 0.33}}, (), {}),
+    "electrode_error_5mm": ({"electrode_position_error": {"sd_mm": 5.0}}, (), {}),
+    "noise_x2": ({"adc_noise": {"noise_v": 4.0e-4, "bits": 24, "full_scale_v": 10.0}}, (), {}),
+    "physical_all": ({**PHYSICAL, "electrode_contact_impedance": {}}, ("contact_resistance", "hysteresis"), {}),
+    "ideal": ({}, ("specimen_variation", "electrode_position_error", "foam_spread", "hysteresis", "baseline_drift"), {}),
+}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    parser.add_argument("--two-point", action="store_true")
+    parser.add_argument("--out", default=None)
+    args = parser.parse_args()
+    for name in args.variants:
+        add, remove, overrides = VARIANTS[name]
+        for layout in LAYOUTS:
+            cfg = layout_variant(layout, add, remove, **overrides)
+            start, load = time.time(), os.getloadavg()[0]
+            result = {"variant": name, "layout": layout, "seeds": args.seeds,
+                      "single_point": single_point_protocol(cfg, tuple(args.seeds))}
+            if args.two_point:
+                result["two_point"] = two_point_protocol(cfg, tuple(args.seeds))
+            result.update(seconds=round(time.time() - start, 1), load_average=round(load, 2))
+            sp = result["single_point"]
+            print(f"{name:28s} {layout:13s} loc {sp['localisation_mm'][0]:6.2f} ± {sp['localisation_mm'][1]:5.2f} "
+                  f"(per-frame sd {sp['localisation_sd_mm'][0]:5.2f})  4N {sp['by_force_mm'][4.0][0]:6.2f}  "
+                  f"10N {sp['by_force_mm'][10.0][0]:6.2f}  |F err| {sp['force_error_n'][0]:.2f} ± {sp['force_error_n'][1]:.2f}"
+                  f"  r {sp['force_r'][0]:.3f}  LOQ {sp['loq_kpa'][0]:.1f} kPa"
+                  + (f"  2pt gradual {result['two_point']['gradual_share']:.2f}" if args.two_point else "")
+                  + f"  [{result['seconds']} s, load {result['load_average']}]", flush=True)
+            if args.out:
+                with open(args.out, "a") as handle:
+                    handle.write(json.dumps(result) + "\n")
+
+
+if __name__ == "__main__":
+    main()
