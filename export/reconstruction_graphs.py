@@ -1,4 +1,7 @@
-"""A fitted TikhonovReconstruction (models/tikhonov_reconstruction.py) as one ONNX graph.
+"""Fitted ERT reconstructions as ONNX graphs: `tikhonov_to_onnx` (models/tikhonov_reconstruction.py)
+and `linear_image_to_onnx` (models/ert/: Gauss-Newton and GREIT, below the first).
+
+TikhonovReconstruction:
 
 `voltages` [batch, n_channels] float32 (changes from the unloaded frame)
   -> MatMul with Q^T (the precomputed regularised inverse, seed 002 eq. 4)      [batch, n_pixels]
@@ -9,6 +12,14 @@
 -> `prediction` [batch, 3] (x_mm, y_mm, force_n) and `force_pixels` [batch, n_pixels].
 
 Everything is fixed after fit: the graph is a linear map, a convolution, a peak and a sum.
+
+LinearImageReconstruction (models/ert/linear_image.py):
+`voltages` -> MatMul with K (the transfer-matrix reduction, n_channels x n_z) -> MatMul with A^T
+(the image map)                                                              `image` [batch, n_pixels]
+  -> ReduceMax, Mul by the threshold, Sub, Relu                                 the read-out weights
+  -> MatMul with the pixel centres, Div by the weights' sum                    x_mm, y_mm
+  -> c0 + c1 m + c2 m^2 of the weights' sum m                                   force_n
+-> `prediction` [batch, 3] and `image`.
 """
 import numpy as np
 import onnx
@@ -79,6 +90,52 @@ def tikhonov_to_onnx(model, opset: int = 17) -> onnx.ModelProto:
     proto.ir_version = min(proto.ir_version, 9)
     helper.set_model_props(proto, {"inputs": f"voltages[{n_channels}] float32 (change from the unloaded frame, V)",
                                    "outputs": "prediction: x_mm, y_mm, force_n; force_pixels (N)"})
+    onnx.checker.check_model(proto)
+    return proto
+
+
+def linear_image_to_onnx(model, opset: int = 17) -> onnx.ModelProto:
+    """A fitted LinearImageReconstruction (GaussNewtonReconstruction, GreitReconstruction) as one ONNX model."""
+    if not hasattr(model, "image_map_"):
+        raise InputError("the reconstruction is not fitted; call fit before exporting it")
+    n_pixels, n_channels = model.image_map_.shape[0], model.compression_.shape[1]
+    c0, c1, c2 = model.force_coefficients_
+    inits = [
+        _const("reduction", model.compression_.T),
+        _const("image_map_t", model.image_map_.T),
+        _const("threshold", [model.threshold_]),
+        _const("centres", model.pixel_centres_mm_),
+        _const("axis1", [1], np.int64),
+        _const("tiny", [1e-30]),
+        _const("c0", [c0]), _const("c1", [c1]), _const("c2", [c2]),
+    ]
+    nodes = [
+        helper.make_node("MatMul", ["voltages", "reduction"], ["transfer"]),
+        helper.make_node("MatMul", ["transfer", "image_map_t"], ["image"]),
+        helper.make_node("ReduceMax", ["image"], ["peak"], axes=[1], keepdims=1),
+        helper.make_node("Mul", ["peak", "threshold"], ["level"]),
+        helper.make_node("Sub", ["image", "level"], ["above"]),
+        helper.make_node("Relu", ["above"], ["weights"]),
+        helper.make_node("ReduceSum", ["weights", "axis1"], ["mass"], keepdims=1),
+        helper.make_node("Max", ["mass", "tiny"], ["denominator"]),
+        helper.make_node("MatMul", ["weights", "centres"], ["moments"]),
+        helper.make_node("Div", ["moments", "denominator"], ["xy_mm"]),
+        helper.make_node("Mul", ["mass", "c2"], ["quadratic"]),
+        helper.make_node("Add", ["quadratic", "c1"], ["slope"]),
+        helper.make_node("Mul", ["slope", "mass"], ["varying"]),
+        helper.make_node("Add", ["varying", "c0"], ["force_n"]),
+        helper.make_node("Concat", ["xy_mm", "force_n"], ["prediction"], axis=1),
+    ]
+    graph = helper.make_graph(
+        nodes, f"{type(model).__name__}",
+        [helper.make_tensor_value_info("voltages", TensorProto.FLOAT, ["batch", n_channels])],
+        [helper.make_tensor_value_info("prediction", TensorProto.FLOAT, ["batch", 3]),
+         helper.make_tensor_value_info("image", TensorProto.FLOAT, ["batch", n_pixels])],
+        inits)
+    proto = helper.make_model(graph, opset_imports=[helper.make_opsetid("", opset)], producer_name="touchstone")
+    proto.ir_version = min(proto.ir_version, 9)
+    helper.set_model_props(proto, {"inputs": f"voltages[{n_channels}] float32 (change from the unloaded frame, V)",
+                                   "outputs": "prediction: x_mm, y_mm, force_n; image"})
     onnx.checker.check_model(proto)
     return proto
 

@@ -22,28 +22,13 @@ the reconstruction is judged on. The grid `alpha_relative` is relative: alpha^2 
 mean diag(J^T J) / mean diag(Gamma^T Gamma).
 """
 import numpy as np
-import scipy.sparse as sp
 from scipy.ndimage import correlate
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
-from data.physics.sheet_conduction import (
-    PatchUpdateSolver,
-    SheetGrid,
-    SheetSolver,
-    four_terminal_matrix,
-)
-from data.scenes.ert import injection_pairs, measurement_pairs
-
-
-def pixel_laplacian(n: int) -> np.ndarray:
-    """5-point Laplacian on an n x n pixel grid with no-flux edges (rows sum to zero)."""
-    second = sp.diags([1.0, -2.0, 1.0], [-1, 0, 1], shape=(n, n)).tolil()
-    second[0, 0] = second[-1, -1] = -1.0
-    second = second.tocsr()
-    eye = sp.identity(n)
-    return (sp.kron(eye, second) + sp.kron(second, eye)).toarray()
+from models.ert.priors import pixel_laplacian
+from models.ert.readings import pixel_sensitivity, transfer_basis
 
 
 def bilinear_matrix(n_out: int, n_in: int) -> np.ndarray:
@@ -100,18 +85,7 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
     # -- stage 0: the forward model ---------------------------------------------------------------
     def jacobian(self) -> np.ndarray:
         """(n_channels, n_pixels) d voltage / d (relative pixel conductance) at the unloaded sheet."""
-        g = self.geometry
-        electrodes = np.asarray(g["electrodes_mm"], dtype=float)
-        grid = SheetGrid(g["side_mm"], g["grid_nodes"], electrodes, g.get("electrode_width_mm", 0.0))
-        solver = PatchUpdateSolver(SheetSolver(grid), 1.0 / g["sheet_resistance_ohm_per_sq"])
-        n = self.pixels_per_side
-        column = np.clip((grid.node_xy_mm / (g["side_mm"] / n)).astype(int), 0, n - 1)
-        node_pixel = column[:, 1] * n + column[:, 0]
-        dz = solver.transfer_resistance_jacobian(np.eye(n * n)[node_pixel])
-        inj = injection_pairs(g["injection"], len(electrodes))
-        meas = measurement_pairs(g["measurement"], len(electrodes))
-        to_channels = four_terminal_matrix(inj, meas, len(electrodes), g["current_a"])
-        return np.asarray(to_channels @ dz.reshape(len(dz), -1).T)
+        return np.asarray(transfer_basis(self.geometry) @ pixel_sensitivity(self.geometry, self.pixels_per_side))
 
     def _check_params(self):
         if self.geometry is None:

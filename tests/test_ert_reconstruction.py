@@ -72,9 +72,16 @@ def test_onnx_graph_matches_the_estimator_in_onnxruntime(fitted):
     expected = model.predict(table.channels)
     got = predict_with_onnx(session, table.channels)
     np.testing.assert_allclose(got[:, 2], expected[:, 2], rtol=1e-3, atol=1e-3 * np.abs(expected[:, 2]).max())
-    # float32 may move a near-tie peak by one field pixel (1.2 mm); everything else is exact
+    # float32 may pick another peak where two are tied to float32 precision: the peak it picks
+    # must then be as high, in the float64 field, as the estimator's (to 1e-4 of the peak)
     position = np.abs(got[:, :2] - expected[:, :2]).max(axis=1)
-    assert (position < 1e-3).mean() > 0.9 and position.max() <= 2.5
+    assert (position < 1e-3).mean() > 0.9
+    field = model.pressure_field_kpa(table.channels)
+    step = model.geometry["side_mm"] / field.shape[-1]
+    column, row = (got[:, 0] / step).astype(int), (got[:, 1] / step).astype(int)
+    picked = field[np.arange(len(field)), row, column]
+    peak = field.reshape(len(field), -1).max(axis=1)
+    assert (picked >= peak - 1e-4 * np.abs(peak)).all()
 
 
 def test_wrong_voltage_length_is_one_line_for_estimator_and_onnx(fitted):

@@ -30,6 +30,9 @@ from omegaconf import DictConfig, ListConfig, OmegaConf
 from scipy import stats
 
 from common.atomic import atomic_write_text
+from common.errors import InputError
+from models.ert.gauss_newton import GaussNewtonReconstruction
+from models.ert.greit import GreitReconstruction
 from models.tikhonov_reconstruction import TikhonovReconstruction
 from runs.report.figure_files import write_figures
 from runs.report.plots import panel_grid
@@ -58,12 +61,52 @@ def scene_for(cfg, **overrides):
     return instantiate(node)
 
 
+RECONSTRUCTIONS = ("tikhonov", "gauss_newton", "greit")
+
+
+def fit_reconstruction(kind: str, cfg, seed: int, X, y, params: dict):
+    """A reconstruction of `kind` for sensor `seed` of the scene in `cfg`, its hyper-parameters
+    chosen (and Tikhonov's coefficient field fitted) on the validation presses (X, y): a
+    calibration recording, never test presses. GREIT trains on presses of other simulated
+    sensors (never `seed`)."""
+    geometry = scene_for(cfg, seed=seed).geometry()
+    if kind == "tikhonov":
+        model = TikhonovReconstruction(geometry=geometry, seed=seed, **params)
+    elif kind == "gauss_newton":
+        model = GaussNewtonReconstruction(geometry=geometry, **params)
+    elif kind == "greit":
+        model = GreitReconstruction(geometry=geometry, training_scene=OmegaConf.to_container(cfg.scene, resolve=True),
+                                    **params)
+        if seed in model.training_sensor_seeds():
+            raise InputError(f"greit: training_seed {model.training_seed} puts the sensor under test (seed {seed}) "
+                             f"among the training sensors; choose another training_seed")
+    else:
+        raise InputError(f"reconstruction kind must be one of {', '.join(RECONSTRUCTIONS)}, got '{kind}'")
+    return model.fit(X, y)
+
+
 def calibrate(cfg, seed, calibration: dict, reconstruction: dict):
-    """(scene, fitted reconstruction) from one calibration recording of sensor `seed`."""
+    """(scene, fitted reconstruction) from one calibration recording of sensor `seed`;
+    `reconstruction` holds `kind` (default tikhonov) and the reconstruction's parameters."""
     scene = scene_for(cfg, seed=seed, protocol="calibration", **calibration)
     table = scene.generate()
-    model = TikhonovReconstruction(geometry=scene.geometry(), seed=seed, **reconstruction)
-    return scene, model.fit(table.channels, table.targets)
+    params = dict(reconstruction)
+    kind = params.pop("kind", "tikhonov")
+    return scene, fit_reconstruction(kind, cfg, seed, table.channels, table.targets, params)
+
+
+def chosen_hyperparameters(model) -> dict:
+    """What a fitted reconstruction chose on its validation presses."""
+    if isinstance(model, TikhonovReconstruction):
+        return {"alpha_relative": model.alpha_relative_}
+    return {**model.params_, "threshold": model.threshold_}
+
+
+def validation_localisation_mm(model) -> float:
+    """The chosen setting's mean localisation error on the validation presses."""
+    if isinstance(model, TikhonovReconstruction):
+        return float(model.validation_scores_.min(axis=0)[0])
+    return min(row["localisation_mm"] for row in model.validation_scores_)
 
 
 def limit_of_quantification(cfg, seed, model, n_blank: int) -> dict:
@@ -89,8 +132,8 @@ def single_point_study(cfg, output_dir, seeds=(0, 1, 2), calibration=None, recon
         frame["error_mm"] = np.hypot(frame.x_pred_mm - frame.x_mm, frame.y_pred_mm - frame.y_mm)
         frame["force_error_n"] = frame.force_pred_n - frame.force_n
         rows.append(frame)
-        loq.append({"seed": seed, "alpha_relative": model.alpha_relative_, **limit_of_quantification(cfg, seed, model, n_blank)})
-        val.append(float(model.validation_scores_.min(axis=0)[0]))
+        loq.append({"seed": seed, "chosen": chosen_hyperparameters(model), **limit_of_quantification(cfg, seed, model, n_blank)})
+        val.append(validation_localisation_mm(model))
     return pd.concat(rows, ignore_index=True), {"loq": loq, "val_localisation_mm": val}
 
 
@@ -111,7 +154,7 @@ def run_localisation(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None,
                "localisation_sd_mm": mean_sd(per_seed["std"]),
                "presses_used": len(used), "presses": len(frame),
                "loq_kpa": mean_sd([r["loq_kpa"] for r in extra["loq"]]),
-               "alpha_relative": [r["alpha_relative"] for r in extra["loq"]],
+               "chosen": [r["chosen"] for r in extra["loq"]],
                "paper": PAPER.get(cfg.scene.name, {}),
                "val": {"localisation_mm": float(np.mean(extra["val_localisation_mm"]))}}
     electrodes = OmegaConf.to_container(cfg.scene.electrodes_mm, resolve=True)
@@ -154,6 +197,8 @@ def run_two_point(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, re
     tables, distances = [], {}
     for seed in seeds:
         scene, model = calibrate(cfg, seed, _plain(calibration) or {}, _plain(reconstruction) or {})
+        if not isinstance(model, TikhonovReconstruction):
+            raise InputError("ert_two_point reads the calibrated pressure field: reconstruction.kind must be tikhonov")
         test = scene_for(cfg, seed=seed, protocol="two_point", n_repeats=n_repeats).generate()
         field = model.pressure_field_kpa(test.channels)
         step = scene.side_mm / field.shape[-1]

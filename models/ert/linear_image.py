@@ -1,0 +1,79 @@
+"""The estimator shared by the linear ERT reconstructions (gauss_newton.py, greit.py).
+
+frame v (changes from the unloaded frame) -> u = K^T v (readings.py) -> image = A u on a pixel
+grid -> thresholded weighted centroid (image_readout.py) -> (x_mm, y_mm); force_n =
+c0 + c1 m + c2 m^2 with m the thresholded image's mass. Only A and how it is built differ
+between reconstructions: a subclass yields candidate maps (one per hyper-parameter setting),
+and `fit` picks the candidate and the read-out threshold with the lowest mean localisation
+error on the presses it is given, which are validation presses (a calibration recording),
+never test presses. The force polynomial is then fitted on the same presses.
+"""
+import numpy as np
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted
+
+from common.errors import InputError
+from models.ert.image_readout import thresholded_centroid
+from models.ert.readings import transfer_basis
+
+
+class LinearImageReconstruction(RegressorMixin, BaseEstimator):
+    """Subclasses set `geometry`, `thresholds`, `quantification_limit_n` and implement
+    `_candidates(basis)` -> iterable of (params dict, A (n_pixels, n_z)) and `_centres()`."""
+
+    def _check_X(self, X, n_channels):
+        X = np.asarray(X, dtype=float)
+        if X.ndim != 2 or X.shape[1] != n_channels:
+            raise InputError(f"voltages must have shape (n_frames, {n_channels}), got {X.shape}")
+        if not np.isfinite(X).all():
+            raise InputError("voltages contain NaN or infinite values")
+        return X
+
+    def fit(self, X, y):
+        """X: (n_presses, n_channels) validation voltages; y: (n_presses, 3) x_mm, y_mm, force_n."""
+        if self.geometry is None:
+            raise InputError("model.geometry is required: the scene's nominal geometry (ERTScene.geometry())")
+        thresholds = np.atleast_1d(np.asarray(self.thresholds, dtype=float))
+        if thresholds.size == 0 or not ((thresholds >= 0) & (thresholds < 1)).all():
+            raise InputError(f"model.thresholds must lie in [0, 1), got {thresholds.tolist()}")
+        basis = transfer_basis(self.geometry)
+        X = self._check_X(X, basis.shape[0])
+        y = np.asarray(y, dtype=float)
+        if y.ndim != 2 or y.shape[1] < 3 or len(y) != len(X):
+            raise InputError(f"validation targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
+        usable = y[:, 2] >= self.quantification_limit_n
+        if usable.sum() < 4:
+            raise InputError(f"the validation set has {int(usable.sum())} presses at or above the quantification "
+                             f"limit ({self.quantification_limit_n} N); at least 4 are needed")
+        u, y = np.asarray(basis.T @ X[usable].T).T, y[usable, :3]
+        centres = self._centres()
+        best, scores = None, []
+        for params, image_map in self._candidates(basis):
+            images = u @ image_map.T
+            for threshold in thresholds:
+                xy, _ = thresholded_centroid(images, centres, threshold)
+                error = float(np.hypot(*(xy - y[:, :2]).T).mean())
+                scores.append({**params, "threshold": float(threshold), "localisation_mm": error})
+                if best is None or error < best[0]:
+                    best = (error, params, float(threshold), image_map)
+        _, self.params_, self.threshold_, self.image_map_ = best
+        self.validation_scores_ = scores
+        self.compression_ = np.asarray(basis.T.todense())          # (n_z, n_channels)
+        self.pixel_centres_mm_ = centres
+        _, mass = thresholded_centroid(u @ self.image_map_.T, centres, self.threshold_)
+        design = np.column_stack([np.ones_like(mass), mass, mass ** 2])
+        self.force_coefficients_ = np.linalg.lstsq(design, y[:, 2], rcond=None)[0]
+        self.n_features_in_ = basis.shape[0]
+        return self
+
+    def image(self, X) -> np.ndarray:
+        """(n_frames, n_pixels) reconstructed image (rows in y, columns in x of `pixel_centres_mm_`)."""
+        check_is_fitted(self, "image_map_")
+        X = self._check_X(X, self.n_features_in_)
+        return (X @ self.compression_.T) @ self.image_map_.T
+
+    def predict(self, X) -> np.ndarray:
+        """(n_frames, 3): x_mm, y_mm (thresholded centroid) and force_n."""
+        xy, mass = thresholded_centroid(self.image(X), self.pixel_centres_mm_, self.threshold_)
+        c = self.force_coefficients_
+        return np.column_stack([xy, c[0] + c[1] * mass + c[2] * mass ** 2])

@@ -1,0 +1,124 @@
+"""The ERT reconstructions of models/ert/ (Gauss-Newton with priors, GREIT, the sub-pixel read-out):
+the estimator contract, their ONNX graphs in onnxruntime, what each recovers, and that their
+hyper-parameters come from validation presses only."""
+import numpy as np
+import onnxruntime as ort
+import pytest
+
+from common.errors import InputError
+from data.physics.sheet_conduction import four_terminal_voltage_v
+from data.scenes.ert import ERTScene
+from export.reconstruction_graphs import linear_image_to_onnx, predict_with_onnx
+from models.ert.gauss_newton import GaussNewtonReconstruction
+from models.ert.greit import GreitReconstruction
+from models.ert.image_readout import thresholded_centroid
+from models.ert.readings import pixel_centres_mm, transfer_basis, unique_transfer_entries
+
+BOUNDARY = [[15, 120], [50, 120], [85, 120], [120, 85], [120, 50], [120, 15], [85, 0], [50, 0], [15, 0],
+            [0, 15], [0, 50], [0, 85]]
+SMALL = dict(electrodes_mm=BOUNDARY, side_mm=120.0, grid_nodes=25, patch_mm=20.0,
+             force_range_n=(3.0, 12.0), n_force_levels=2, grid_points_per_side=6)
+QUIET = {"contact_resistance": {}, "foam_spread": {}}
+
+
+def scene(**overrides):
+    return ERTScene(**{"protocol": "calibration", "effects": QUIET, **SMALL, **overrides})
+
+
+@pytest.fixture(scope="module")
+def calibration():
+    s = scene()
+    return s, s.generate()
+
+
+@pytest.fixture(scope="module")
+def gauss_newton(calibration):
+    s, table = calibration
+    return GaussNewtonReconstruction(geometry=s.geometry(), pixels_per_side=12,
+                                     lambdas_relative=(1e-3, 1e-2)).fit(table.channels, table.targets)
+
+
+@pytest.fixture(scope="module")
+def greit(calibration):
+    s, table = calibration
+    training = {**SMALL, "effects": QUIET}
+    return GreitReconstruction(geometry=s.geometry(), training_scene=training, pixels_per_side=16, margin_mm=20.0,
+                               desired_radius_mm=(10.0,), noise_weights=(1e-3, 1e-2), n_training_sensors=2,
+                               presses_per_sensor=150, training_position_range_mm=(0.0, 120.0),
+                               training_force_range_n=(3.0, 12.0)).fit(table.channels, table.targets)
+
+
+def test_channels_are_the_transfer_basis_times_the_unique_transfer_entries():
+    s = scene()
+    rng = np.random.default_rng(0)
+    n = len(BOUNDARY)
+    z = np.zeros((n, n))
+    a = rng.normal(size=(n - 1, n - 1))
+    z[:-1, :-1] = a + a.T                      # symmetric, grounded at the last electrode
+    injections, measurements = s.patterns()
+    channels = four_terminal_voltage_v(z, injections, measurements, s.current_a).ravel()
+    entries = unique_transfer_entries(n)
+    assert np.allclose(transfer_basis(s.geometry()) @ z[entries[:, 0], entries[:, 1]], channels)
+
+
+def test_centroid_read_out_is_sub_pixel_where_the_arg_max_is_not():
+    centres = pixel_centres_mm(100.0, 10)                # 10 mm pixels
+    truth = np.array([[43.0, 61.5], [12.2, 80.9], [70.7, 30.3]])
+    images = np.exp(-((centres[None] - truth[:, None]) ** 2).sum(-1) / (2 * 12.0 ** 2))
+    xy, mass = thresholded_centroid(images, centres, 0.5)
+    argmax = centres[images.argmax(axis=1)]
+    assert np.hypot(*(xy - truth).T).max() < 0.6          # well inside a pixel
+    assert np.hypot(*(argmax - truth).T).max() > 2.0
+    assert (mass > 0).all()
+
+
+@pytest.mark.parametrize("name", ["gauss_newton", "greit"])
+def test_fit_returns_self_with_learned_state_and_onnx_matches(name, request, calibration):
+    model = request.getfixturevalue(name)
+    s, table = calibration
+    assert model.fit.__self__ is model
+    state = [k for k in vars(model) if k.endswith("_")]
+    assert {"image_map_", "threshold_", "params_", "force_coefficients_", "n_features_in_"} <= set(state)
+    assert not [k for k in vars(model) if k.endswith("_") and k in model.get_params()]
+    test = scene(protocol="single_point", grid_points_per_side=5, n_force_levels=1, force_range_n=(8.0, 8.0)).generate()
+    eager = model.predict(test.channels)
+    assert eager.shape == (len(test.channels), 3) and np.isfinite(eager).all()
+    error = np.hypot(*(eager[:, :2] - test.targets[:, :2]).T)
+    assert error.mean() < 12.0                                  # 20 mm patches on a 120 mm sheet
+    session = ort.InferenceSession(linear_image_to_onnx(model).SerializeToString(), providers=["CPUExecutionProvider"])
+    onnx = predict_with_onnx(session, test.channels)
+    assert np.allclose(onnx[:, :2], eager[:, :2], atol=0.05)
+    assert np.allclose(onnx[:, 2], eager[:, 2], rtol=1e-3, atol=1e-3)
+
+
+def test_gauss_newton_recovers_a_single_noise_free_perturbation_within_a_few_mm(gauss_newton):
+    # presses at patch centres load one patch symmetrically: the image's centroid is the patch centre
+    points = np.array([[50.0, 70.0], [30.0, 30.0], [90.0, 50.0], [70.0, 90.0]])
+    contacts = np.column_stack([points, np.full(len(points), 8.0)])
+    frames = scene(protocol="single_point").simulate(contacts).channels
+    xy = gauss_newton.predict(frames)[:, :2]
+    assert np.hypot(*(xy - points).T).max() < 3.0
+
+
+def test_gauss_newton_chooses_among_its_priors_and_rejects_bad_settings(calibration):
+    s, table = calibration
+    model = GaussNewtonReconstruction(geometry=s.geometry(), pixels_per_side=8, lambdas_relative=(1e-2,))
+    model.fit(table.channels, table.targets)
+    assert {row["prior"] for row in model.validation_scores_} == {"tikhonov", "laplacian", "noser"}
+    assert model.params_["prior"] in ("tikhonov", "laplacian", "noser")
+    with pytest.raises(InputError, match="priors"):
+        GaussNewtonReconstruction(geometry=s.geometry(), priors=("ridge",)).fit(table.channels, table.targets)
+    with pytest.raises(InputError, match="thresholds"):
+        GaussNewtonReconstruction(geometry=s.geometry(), thresholds=(1.5,)).fit(table.channels, table.targets)
+    with pytest.raises(InputError, match="shape"):
+        model.predict(table.channels[:, :5])
+    with pytest.raises(InputError, match="NaN"):
+        model.predict(np.full_like(table.channels, np.nan))
+
+
+def test_greit_trains_on_other_sensors_than_the_one_it_reconstructs(greit, calibration):
+    assert greit.training_sensor_seeds() == [10_000, 10_001]
+    assert calibration[0].seed not in greit.training_sensor_seeds()
+    assert greit.image_map_.shape == (16 * 16, len(unique_transfer_entries(len(BOUNDARY))))
+    # the image grid reaches past the sheet, so a blob at an edge keeps its centre
+    assert greit.pixel_centres_mm_.min() < 0.0 and greit.pixel_centres_mm_.max() > 120.0
