@@ -81,6 +81,7 @@ ALLOWED_CLASSES = frozenset({
     "models.rocket.classifier.RocketClassifier",
     "models.rocket.minirocket.MiniRocket",
     "models.rocket.minirocket.DilationGroup",
+    "models.nets.member_average.MemberAverage",
     # the torch.nn layers those networks are made of
     "torch.nn.modules.activation.ReLU",
     "torch.nn.modules.batchnorm.BatchNorm1d",

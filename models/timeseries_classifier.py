@@ -16,6 +16,21 @@ validation accuracy or, while accuracy is below 1, the same accuracy with a vali
 by more than `early_stopping_min_delta`) came for `patience(epoch of the last one)` epochs: as many
 again as it took to get there, between `early_stopping_min_patience` and `early_stopping_patience`.
 
+Choosing the number of epochs (`epoch_selection`): `validation` keeps the best epoch on the
+validation windows given to `fit` (the seed paper's force-level split); `folds` (trainer=reference)
+trains once per stratified fold of the training recordings (data/splits/indices.py
+stratified_folds) with early stopping on the held-out fold, takes the median of the folds' best
+epochs, and refits on every training window for that many epochs: the epoch count rests on every
+training recording instead of a small set's 8-10 validation recordings, the model is fitted on all
+of them, and the validation split stays untouched for reporting and for choosing between models.
+The folds' held-out predictions (`out_of_fold_proba_`, each training window predicted by a fit
+that never saw its recording) are kept; a run whose validation side is empty (every class has one
+training recording) reports them as its validation scores.
+
+`ensemble_size` > 1 trains that many networks with seeds seed, seed+1, ... (InceptionTime's
+paper: 5) and averages their class probabilities (models/nets/member_average.py), one module,
+so it exports to one ONNX graph.
+
 Several processes (torchrun, submitit tasks) train one net as one process would: models/distributed.py.
 
 BatchNorm: the stored (eval-mode) statistics are a running average over the last few training
@@ -43,13 +58,17 @@ from torch import nn
 
 from common.errors import InputError
 from common.progress import HEARTBEAT_S, on_terminal, progress
-from models.distributed import TrainingGroup, rank_seed
 from common.standardise import mean_and_scale
+from data.splits.indices import stratified_folds
+from models.distributed import TrainingGroup, rank_seed
+from models.epoch_callback import member_callback
+from models.nets.member_average import MemberAverage
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
 log = logging.getLogger(__name__)
 OPTIMISERS = ("sgd", "adam")
 SCHEDULES = ("milestones", "plateau")
+EPOCH_SELECTIONS = ("validation", "folds")
 # What a checkpoint must agree on with the fit that resumes it (max_epochs may grow: a run can
 # be extended; device and progress do not change the result).
 RESUME_KEYS = ("optimizer", "lr", "momentum", "weight_decay", "lr_schedule", "milestones", "gamma", "lr_factor",
@@ -65,7 +84,8 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                  lr_plateau_patience=50, min_lr=0.0, early_stopping_patience=None, early_stopping_min_patience=None,
                  early_stopping_min_delta=0.0, batch_size=128,
                  max_batch_fraction=None, max_epochs=40, recalibrate_batchnorm=False, device="cpu", seed=0,
-                 progress=True, checkpoint_path=None, resume_from=None):
+                 progress=True, checkpoint_path=None, resume_from=None, epoch_selection="validation", n_folds=3,
+                 ensemble_size=1):
         self.network = network
         self.modalities = modalities
         self.optimizer = optimizer
@@ -90,6 +110,9 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         self.progress = progress
         self.checkpoint_path = checkpoint_path
         self.resume_from = resume_from
+        self.epoch_selection = epoch_selection
+        self.n_folds = n_folds
+        self.ensemble_size = ensemble_size
 
     # -- helpers ----------------------------------------------------------------------------
     def _batches(self, X, size):
@@ -115,6 +138,17 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                              f"{self.max_epochs}, {self.lr})")
         if n_train < 2:
             raise InputError(f"time-series classifiers need at least 2 training windows, got {n_train}")
+        if self.epoch_selection not in EPOCH_SELECTIONS:
+            raise InputError(f"trainer.epoch_selection must be one of {', '.join(EPOCH_SELECTIONS)}, "
+                             f"got {self.epoch_selection!r}")
+        for name in ("n_folds", "ensemble_size"):
+            value = getattr(self, name)
+            if isinstance(value, bool) or not isinstance(value, int) or value < (2 if name == "n_folds" else 1):
+                raise InputError(f"{'trainer' if name == 'n_folds' else 'model'}.{name} must be a whole number >= "
+                                 f"{2 if name == 'n_folds' else 1}, got {value!r}")
+        if self.ensemble_size > 1 and self.resume_from is not None:
+            raise InputError("trainer.resume_from continues one network; an ensemble (model.ensemble_size > 1) "
+                             "trains again from the start")
 
     def effective_batch_size(self, n_train: int) -> int:
         """The reference implementations' rule (Fawaz et al. 2019, dl-4-tsc classifiers/resnet.py
@@ -223,15 +257,79 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
 
     # -- contract ---------------------------------------------------------------------------
     @flush_denormals()
-    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
-        group = TrainingGroup()  # this process's part when several train the net (models/distributed.py)
-        torch.manual_seed(self.seed)
-        X = np.asarray(X, dtype=np.float32)
-        y = np.asarray(y, dtype=np.int64)
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
+        """`groups`: the recording of each training window (folds keep a recording's windows
+        together); None: every window is its own recording."""
+        X, y = np.asarray(X, dtype=np.float32), np.asarray(y, dtype=np.int64)
         if X.ndim != 3:
             raise InputError(f"time-series classifiers need windows of shape (n, channels, length), got {X.shape}")
         self._check_settings(len(X))
+        if X_val is not None and len(X_val) == 0:
+            X_val = y_val = None
         n_classes = int(max(y.max(), np.max(y_val) if y_val is not None else 0)) + 1
+        if self.ensemble_size > 1:
+            return self._fit_ensemble(X, y, X_val, y_val, n_classes, epoch_callback, groups)
+        if self.epoch_selection == "folds":
+            return self._fit_on_folds(X, y, n_classes, epoch_callback, groups)
+        if X_val is None:
+            raise InputError("trainer.epoch_selection=validation needs validation recordings (none could be carved "
+                             "from these training recordings); use trainer.epoch_selection=folds or declare 'val' "
+                             "recordings")
+        return self._train(X, y, X_val, y_val, n_classes, epoch_callback, int(self.max_epochs))
+
+    def _member(self, **changes) -> "TimeSeriesClassifier":
+        """A fit of this recipe that writes no checkpoint (folds and ensemble members)."""
+        return type(self)(**{**self.get_params(), "checkpoint_path": None, "resume_from": None, "ensemble_size": 1,
+                             **changes})
+
+    def _fit_on_folds(self, X, y, n_classes, epoch_callback, groups):
+        """Epoch count = median of the stratified folds' best epochs; then every training window, that many."""
+        groups = np.arange(len(X)) if groups is None else np.asarray(groups)
+        if len(groups) != len(X):
+            raise InputError(f"{len(groups)} recording ids for {len(X)} training windows")
+        self.out_of_fold_proba_ = np.zeros((len(X), n_classes))
+        self.fold_best_epochs_ = []
+        for k, (fit_rows, held_rows) in enumerate(stratified_folds(y, groups, self.n_folds, self.seed)):
+            fold = self._member(epoch_selection="validation")
+            fold._train(X[fit_rows], y[fit_rows], X[held_rows], y[held_rows], n_classes,
+                        member_callback(epoch_callback, f"fold{k}"), int(self.max_epochs))
+            self.out_of_fold_proba_[held_rows] = fold.predict_proba(X[held_rows])
+            self.fold_best_epochs_.append(fold.best_epoch_)
+        epochs = max(1, int(np.ceil(np.median(self.fold_best_epochs_))))
+        log.info("epochs chosen on %d stratified folds: best epochs %s, median %d; refitting on all %d windows",
+                 len(self.fold_best_epochs_), self.fold_best_epochs_, epochs, len(X))
+        self._train(X, y, None, None, n_classes, epoch_callback, epochs)
+        self.best_epoch_ = epochs
+        return self
+
+    def _fit_ensemble(self, X, y, X_val, y_val, n_classes, epoch_callback, groups):
+        """Members with seeds seed, seed+1, ...: one module averaging their probabilities."""
+        members = []
+        for m in range(self.ensemble_size):
+            member = self._member(seed=self.seed + m)
+            member.fit(X, y, X_val, y_val, member_callback(epoch_callback, f"member{m}"), groups)
+            members.append(member)
+        self.channel_mean_, self.channel_std_ = members[0].channel_mean_, members[0].channel_std_
+        # Each member standardised with the same statistics (the same training windows): one map in front.
+        self.module_ = MemberAverage([member.module_ for member in members]).eval()
+        self.device_ = members[0].device_
+        self.classes_ = np.arange(n_classes)
+        self.history_ = [{**record, "member": m} for m, member in enumerate(members) for record in member.history_]
+        self.best_epoch_ = [member.best_epoch_ for member in members]
+        self.n_epochs_ = [member.n_epochs_ for member in members]
+        self.batch_size_ = members[0].batch_size_
+        self.improved_epoch_ = [member.improved_epoch_ for member in members]
+        if self.epoch_selection == "folds":
+            self.out_of_fold_proba_ = np.mean([member.out_of_fold_proba_ for member in members], axis=0)
+            self.fold_best_epochs_ = [member.fold_best_epochs_ for member in members]
+        self.n_features_in_ = X.shape[1]
+        return self
+
+    def _train(self, X, y, X_val, y_val, n_classes, epoch_callback, max_epochs):
+        """One network on (X, y), the best epoch on (X_val, y_val) kept; without them, `max_epochs`
+        epochs and the last one kept."""
+        group = TrainingGroup()  # this process's part when several train the net (models/distributed.py)
+        torch.manual_seed(self.seed)
         self.channel_mean_, self.channel_std_ = mean_and_scale(X, axis=(0, 2), keepdims=True)
         X = self._scaled(X)
         self.classes_ = np.arange(n_classes)
@@ -263,11 +361,11 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             if state.get("cuda_rng") is not None and torch.cuda.is_available():
                 torch.cuda.set_rng_state_all(state["cuda_rng"])
             if state["stopped"]:
-                first_epoch = self.max_epochs  # the interrupted run had already stopped early
+                first_epoch = max_epochs  # the interrupted run had already stopped early
         start = time.perf_counter()
         stopped = False
         self.step_losses_ = []  # the global batch's mean loss at every optimiser step of this fit
-        bar = progress(range(first_epoch, self.max_epochs), desc=type(self.module_).__name__, unit="epochs",
+        bar = progress(range(first_epoch, max_epochs), desc=type(self.module_).__name__, unit="epochs",
                        enabled=self.progress and group.is_writer)
         for epoch in bar:
             self.module_.train()

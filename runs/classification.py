@@ -105,6 +105,18 @@ def _table_ids(datamodule, rows) -> dict:
     return {name: datamodule.table.channels[rows, k] for k, name in enumerate(datamodule.channel_names)}
 
 
+def _recording_groups(model, datamodule) -> dict:
+    """The recording of every training window, for a model that folds them."""
+    if "epoch_selection" not in model.get_params():
+        return {}
+    if len(datamodule.train_window_recording) != len(datamodule.y_train):
+        if model.epoch_selection == "folds":
+            raise InputError("trainer.epoch_selection=folds cannot fold virtual force-level windows (they belong to "
+                             "no recording); use trainer.epoch_selection=validation with augment")
+        return {}
+    return {"groups": datamodule.train_window_recording}
+
+
 def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> ClassificationResult:
     (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     summary = datamodule.summary()
@@ -123,18 +135,32 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
             model.set_params(checkpoint_path=str(checkpoint_folder(output_dir) / "last.pt"))
         model.set_params(resume_from=cfg.trainer.get("resume_from"))
     start, cpu_start = time.perf_counter(), time.process_time()
-    model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback)
+    if table:
+        model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback)
+    else:  # windows of one recording stay in one fold when a net chooses its epochs on folds
+        model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback,
+                  **_recording_groups(model, datamodule))
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
     if "checkpoint_path" in model.get_params():  # the deployed model refits from scratch, never from this run's files
         model.set_params(checkpoint_path=None, resume_from=None)
     calibration = _calibrate(model, datamodule) if table else None
-    proba, proba_test = model.predict_proba(X_val), model.predict_proba(X_test)
+    proba_test = model.predict_proba(X_test)
+    val_levels = getattr(datamodule, "val_levels_per_window", None)
+    val_recordings = getattr(datamodule, "val_window_recording", None)
+    if len(y_val) == 0:  # every class has one training recording: nothing could be carved
+        if getattr(model, "out_of_fold_proba_", None) is None:
+            raise InputError(f"{type(model).__name__} has no validation recordings to be scored on (every class has "
+                             "one training recording); declare 'val' recordings in the file's split")
+        proba, y_val = model.out_of_fold_proba_, y_train  # each predicted by a fold fit that never saw it
+        val_recordings, val_levels = datamodule.train_window_recording, datamodule.train_levels_per_window
+        summary["validation"] = "out-of-fold predictions on the training recordings (no validation recordings)"
+    else:
+        proba = model.predict_proba(X_val)
     if table:
         name = f"{type(model).__name__}({model.kind})"
     else:
         name = type(model.module_).__name__ if hasattr(model, "module_") else type(model).__name__
     n_parameters = int(getattr(model, "n_parameters_", 0))
-    val_levels = getattr(datamodule, "val_levels_per_window", None)
     test_levels = getattr(datamodule, "test_levels_per_window", None)
     metrics = {"model": name, "n_parameters": n_parameters, "fit_time_s": fit_time_s,
                "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, "n_parameters": n_parameters},
@@ -145,7 +171,11 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
         metrics["calibration"] = calibration
     if hasattr(model, "best_epoch_"):  # the epoch kept (best on validation), of how many run, at what batch
         metrics["training"] = {"epochs_run": model.n_epochs_, "best_epoch": model.best_epoch_,
-                               "batch_size": model.batch_size_}
+                               "batch_size": model.batch_size_, "epoch_selection": model.epoch_selection}
+        if getattr(model, "fold_best_epochs_", None) is not None:  # the folds that chose the epoch count
+            metrics["training"]["fold_best_epochs"] = model.fold_best_epochs_
+            metrics["training"]["out_of_fold_accuracy"] = float(
+                (model.out_of_fold_proba_.argmax(axis=1) == y_train).mean())
     hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed}
     if table:
         pipeline = table_classifier_pipeline(datamodule, model)
@@ -153,7 +183,7 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
     else:
         hparams.update(augment=bool(datamodule.n_virtual_windows), window=str(summary["window"]))
         pipeline = timeseries_pipeline(datamodule, model)
-        val_ids = {"recording": datamodule.val_window_recording}
+        val_ids = {"recording": val_recordings}
         test_ids = {"recording": datamodule.test_window_recording}
     return ClassificationResult(metrics, list(datamodule.classes), y_val, proba, val_ids, val_levels, y_test,
                                 proba_test, test_ids, test_levels, pipeline, hparams)

@@ -17,8 +17,10 @@ and set to the seed paper's values by the fingertip's (configs/data/fingertip.ya
   `test_fraction` of all recordings for test, then `val_fraction` of the rest for validation,
   stratified by label. `split=predefined` takes the recordings' own train / val / test labels (an
   NPZ's `split` array, a table's split column), carving validation from the train recordings
-  (stratified by label) when none are declared (data/splits/indices.py). Windows of one recording always
-  stay on one side;
+  (stratified by label, never a class's last training recording, so a set with one or two
+  recordings per class trains; data/splits/indices.py) when none are declared. Nets that choose
+  their epochs on folds (trainer=reference) pool training and validation recordings again
+  (models/timeseries_classifier.py). Windows of one recording always stay on one side;
 - `modalities` name groups of channels (names or indices), e.g. triboelectric: [0];
   any number of groups and channels per group, so an IMU's accelerometer + gyroscope fit too;
 - `augment` with `enabled: true` adds virtual force-level windows (Algorithm 1) to training;
@@ -282,12 +284,16 @@ class TimeSeriesDataModule:
                  len(val_rec), len(test_rec))
 
         def windows_of(rows):
-            X, owner = cut_windows(signals[rows], self.window_length, self.window_step, self.trim_start,
-                                   self.trim_end, self.min_variance, self.variance_channel)
+            if len(rows) == 0:  # no validation recordings (every class has one training recording)
+                X, owner = windows_of(np.arange(1))[0][:0], np.zeros(0, dtype=np.int64)
+            else:
+                X, owner = cut_windows(signals[rows], self.window_length, self.window_step, self.trim_start,
+                                       self.trim_end, self.min_variance, self.variance_channel)
             levels = labels["force_level_n"].to_numpy()[rows][owner] if "force_level_n" in labels else None
             return X, codes[rows][owner], levels, rows[owner]
 
         X_train, y_train, levels_train, self.train_window_recording = windows_of(train_rec)
+        self.train_levels_per_window = levels_train
         X_val, y_val, self.val_levels_per_window, self.val_window_recording = windows_of(val_rec)
         X_test, y_test, self.test_levels_per_window, self.test_window_recording = windows_of(test_rec)
         self._check_classes_trained(y_train, {"validation": y_val, "test": y_test})

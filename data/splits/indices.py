@@ -11,6 +11,8 @@ validation is carved from the train rows only; the test rows are never used for 
 `auto` (the default) is `predefined` when the data declare a split and the drawn default
 otherwise (resolve_split): a declared split is ignored only when data.declared_split=ignore says so.
 """
+import warnings
+
 import numpy as np
 from sklearn.model_selection import (
     GroupKFold,
@@ -18,7 +20,6 @@ from sklearn.model_selection import (
     KFold,
     ShuffleSplit,
     StratifiedGroupKFold,
-    StratifiedShuffleSplit,
 )
 
 from common.errors import InputError
@@ -143,8 +144,7 @@ def _carve(train: np.ndarray, fraction: float, seed: int, groups, strata, where:
             fit, val = next(StratifiedGroupKFold(n_splits=n_splits, shuffle=True, random_state=seed)
                             .split(dummy, row_strata, row_groups))
         elif row_strata is not None:
-            fit, val = next(StratifiedShuffleSplit(n_splits=1, test_size=fraction, random_state=seed)
-                            .split(dummy, row_strata))
+            fit, val = _carve_per_class(row_strata, fraction, seed)
         elif row_groups is not None:
             fit, val = next(GroupShuffleSplit(n_splits=1, test_size=fraction, random_state=seed)
                             .split(dummy, groups=row_groups))
@@ -153,10 +153,54 @@ def _carve(train: np.ndarray, fraction: float, seed: int, groups, strata, where:
     except ValueError as error:  # too few rows per class for the share: say so, never fall back
         raise InputError(f"data.split=predefined: cannot carve validation from the train rows of {where} "
                          f"({str(error).splitlines()[0]}); declare 'val' rows") from None
-    if len(fit) == 0 or len(val) == 0:
+    if len(fit) == 0 or (len(val) == 0 and row_strata is None):
         raise InputError(f"data.split=predefined: data.val_fraction={fraction} leaves training or validation "
                          f"without rows of {where}; declare 'val' rows")
     return np.sort(train[fit]), np.sort(train[val])
+
+
+def _carve_per_class(strata: np.ndarray, fraction: float, seed: int):
+    """(fit, validation) positions: ceil(`fraction` x rows) to validation, shared among the
+    classes in proportion to their size (the remainder to the largest fractional shares, ties
+    drawn), as a stratified shuffle split does, but never a class's last row: every class keeps
+    a training row, so a set with one or two recordings per class still trains (a class of one
+    gives validation none; a net then chooses its epochs on folds of the training recordings,
+    models/timeseries_classifier.py)."""
+    rng = np.random.default_rng(seed)
+    labels, counts = np.unique(strata, return_counts=True)
+    room = counts - 1
+    exact = fraction * counts
+    quota = np.minimum(np.floor(exact).astype(int), room)
+    remainder = int(np.ceil(fraction * len(strata))) - quota.sum()
+    for k in sorted(range(len(labels)), key=lambda k: (quota[k] - exact[k], rng.random())):
+        if remainder <= 0:
+            break
+        if quota[k] < room[k]:
+            quota[k] += 1
+            remainder -= 1
+    held = np.concatenate([rng.permutation(np.flatnonzero(strata == label))[:q] for label, q in zip(labels, quota)])
+    held = np.sort(held.astype(np.int64))
+    return np.setdiff1d(np.arange(len(strata)), held), held
+
+
+def stratified_folds(labels, groups, n_folds: int, seed: int):
+    """[(fit_rows, held_rows), ...]: about `n_folds` folds by group (every row of a recording in
+    one fold), stratified by label. Fewer folds when there are fewer groups; a class with fewer
+    groups than folds is in some folds only, so a set with one recording per class still gets
+    folds (each held-out recording of such a class is one the fit never saw)."""
+    labels, groups = np.asarray(labels).astype(str), np.asarray(groups)
+    n_groups = np.unique(groups).size
+    if n_groups < 2:
+        raise InputError(f"validation folds need at least two training recordings, got {n_groups}")
+    n_folds, dummy = min(int(n_folds), n_groups), np.zeros(len(labels))
+    with warnings.catch_warnings():  # "the least populated class has only k members": intended here
+        warnings.simplefilter("ignore", UserWarning)
+        try:
+            folds = list(StratifiedGroupKFold(n_splits=n_folds, shuffle=True, random_state=seed)
+                         .split(dummy, labels, groups))
+        except ValueError:  # every class has fewer recordings than folds: nothing to stratify
+            folds = list(GroupKFold(n_splits=n_folds, shuffle=True, random_state=seed).split(dummy, groups=groups))
+    return [(fit, held) for fit, held in folds if len(fit) and len(held)]
 
 
 def predefined_split(values, val_fraction: float, seed: int, where: str, groups=None, strata=None):
