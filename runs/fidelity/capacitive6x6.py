@@ -29,6 +29,7 @@ from sklearn.metrics import r2_score
 
 from common.standardise import mean_and_scale
 from data.scenes.capacitive6x6 import Capacitive6x6Scene, correlation_factor_rmc_per_n, pressed_cell_rmc
+from data.splits.indices import holdout
 from models.contact_tracking.timing import latency_summary, timed_updates
 from runs.fidelity.observations import Measured, observation, probe
 from runs.report.tracking_metrics import evaluate_tracking
@@ -47,16 +48,11 @@ def _mean_sd(values, digits=4) -> str:
 
 
 def split(table, protocol: str, seed: int) -> tuple[np.ndarray, np.ndarray]:
-    """Train and test rows of a characterisation table under one of `PROTOCOLS`."""
-    rng = np.random.default_rng(seed)
-    if protocol == "paper":
-        order = rng.permutation(len(table.frame))
-        n_test = round(TEST_FRACTION * len(order))
-        return np.sort(order[n_test:]), np.sort(order[:n_test])
-    groups = np.unique(table.groups)
-    test_groups = rng.choice(groups, round(TEST_FRACTION * len(groups)), replace=False)
-    test = np.isin(table.groups, test_groups)
-    return np.flatnonzero(~test), np.flatnonzero(test)
+    """Train and test rows of a characterisation table under one of `PROTOCOLS`: the datamodule's
+    own hold-out (data/splits/indices.py), random or grouped by repetition."""
+    train, test = holdout(np.arange(len(table.frame)), table.groups, TEST_FRACTION,
+                          "random" if protocol == "paper" else "grouped", seed)
+    return np.sort(train), np.sort(test)
 
 
 @probe("capacitive6x6")
