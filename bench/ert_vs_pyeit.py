@@ -28,7 +28,9 @@ frames enter pyEIT negated (same channel order).
 
 Touchstone: `tikhonov` (calibrated, models/tikhonov_reconstruction.py), `gauss_newton`
 (models/ert/gauss_newton.py: prior, lambda, threshold chosen), `greit` (models/ert/greit.py:
-trained on presses of 4 other simulated sensors at the run's noise).
+trained on presses of 4 other simulated sensors at the run's noise), `greit_learned`
+(models/ert/learned_inverse.py: extra trees on GREIT's image, trained on the same other
+sensors' presses).
 
 Costs: set-up (pyEIT: mesh + Jacobian + H; Touchstone: the fit, which for GREIT includes
 simulating its training presses), per-frame reconstruction (batch 1, numpy, median of 200).
@@ -50,7 +52,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from models.ert.image_readout import thresholded_centroid  # noqa: E402
-from runs.studies.ert_tests import fit_reconstruction  # noqa: E402
+from runs.studies.ert_tests import RECONSTRUCTIONS, fit_reconstruction, chosen_hyperparameters  # noqa: E402
 
 THRESHOLDS = (0.3, 0.5, 0.7)
 PYEIT_LAMBDAS = (1e-3, 1e-2, 1e-1)
@@ -155,9 +157,7 @@ class Touchstone:
         return self.model.predict(frames)[:, :2]
 
     def chosen(self):
-        if self.kind == "tikhonov":
-            return {"alpha_relative": self.model.alpha_relative_}
-        return {**self.model.params_, "threshold": self.model.threshold_}
+        return chosen_hyperparameters(self.model)
 
 
 def per_frame_ms(method, frames, calls=200):
@@ -177,6 +177,7 @@ def main(argv=None):
     parser.add_argument("--forces", nargs=2, type=float, default=[4.0, 10.0])
     parser.add_argument("--noise-v", nargs="*", type=float, default=[2e-4, 1e-3])
     parser.add_argument("--greit-presses", type=int, default=600, help="training presses per simulated sensor")
+    parser.add_argument("--methods", nargs="*", default=["pyeit_jac", "pyeit_greit", *RECONSTRUCTIONS])
     parser.add_argument("--json", type=Path, default=None)
     args = parser.parse_args(argv)
     try:
@@ -188,7 +189,8 @@ def main(argv=None):
     print(f"load average at start: {load():.2f}", flush=True)
     for layout in args.layouts:
         geometry = instantiate(scene_cfg(layout, args.noise_v[0]).scene).geometry()
-        peers = {"pyeit_jac": PyEIT(geometry, "jac"), "pyeit_greit": PyEIT(geometry, "greit")}
+        peers = {name: PyEIT(geometry, name.removeprefix("pyeit_")) for name in ("pyeit_jac", "pyeit_greit")
+                 if name in args.methods}
         for name, peer in peers.items():
             print(f"{layout} {name}: set-up {peer.setup_s:.2f} s ({peer.n_elements} elements), load {load():.2f}", flush=True)
         for noise_v in args.noise_v:
@@ -197,9 +199,10 @@ def main(argv=None):
                 cal = recording(cfg, seed, "calibration", [2.0, 15.0])
                 test = recording(cfg, seed, "single_point", sorted(args.forces))
                 methods = dict(peers)
-                for kind in ("tikhonov", "gauss_newton", "greit"):
-                    methods[kind] = Touchstone(kind, cfg, seed, {"presses_per_sensor": args.greit_presses}
-                                               if kind == "greit" else {})
+                for kind in RECONSTRUCTIONS:
+                    if kind in args.methods:
+                        methods[kind] = Touchstone(kind, cfg, seed, {"presses_per_sensor": args.greit_presses}
+                                                   if kind.startswith("greit") else {})
                 for name, method in methods.items():
                     method.fit(cal.channels, cal.targets)
                     error = np.hypot(*(method.predict(test.channels) - test.targets[:, :2]).T)

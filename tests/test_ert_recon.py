@@ -122,3 +122,64 @@ def test_greit_trains_on_other_sensors_than_the_one_it_reconstructs(greit, calib
     assert greit.image_map_.shape == (16 * 16, len(unique_transfer_entries(len(BOUNDARY))))
     # the image grid reaches past the sheet, so a blob at an edge keeps its centre
     assert greit.pixel_centres_mm_.min() < 0.0 and greit.pixel_centres_mm_.max() > 120.0
+
+
+TINY = ["scene=ert_boundary", "scene.grid_points_per_side=4", "scene.grid_nodes=21", "scene.injection=adjacent"]
+
+
+def test_hyper_parameters_are_chosen_on_the_calibration_recording_only(compose_config, tmp_path, monkeypatch):
+    from runs.studies.ert_tests import scene_for, single_point_study
+
+    seen = []
+    original = GaussNewtonReconstruction.fit
+
+    def spy(self, X, y):
+        seen.append(np.asarray(X).copy())
+        return original(self, X, y)
+
+    monkeypatch.setattr(GaussNewtonReconstruction, "fit", spy)
+    cfg = compose_config(["experiment=ert_localisation", *TINY])
+    calibration = {"grid_points_per_side": 4, "n_force_levels": 3, "force_range_n": [2.0, 15.0]}
+    frame, _ = single_point_study(cfg, tmp_path, seeds=(0,), calibration=calibration, n_blank=5,
+                                  reconstruction={"kind": "gauss_newton", "pixels_per_side": 8,
+                                                  "lambdas_relative": [1e-3, 1e-2]})
+    test = scene_for(cfg, seed=0, protocol="single_point", n_force_levels=1, force_range_n=[10.0, 10.0]).generate()
+    cal = scene_for(cfg, seed=0, protocol="calibration", **calibration).generate()
+    assert len(seen) == 1 and len(frame) == len(test.channels)
+    assert np.array_equal(seen[0], cal.channels)                  # the calibration recording, whole
+    # no test frame among the frames the choice saw
+    assert not (np.abs(seen[0][:, None, :] - test.channels[None]).max(axis=-1) == 0).any()
+
+
+def test_learned_inverse_trains_on_other_sensors_and_is_scored_on_the_sensor_under_test(compose_config):
+    from models.ert.learned_inverse import GreitLearnedInverse
+    from runs.studies.ert_tests import fit_reconstruction, scene_for
+
+    cfg = compose_config(["experiment=ert_localisation", *TINY])
+    cal = scene_for(cfg, seed=3, protocol="calibration", grid_points_per_side=4).generate()
+    params = {"pixels_per_side": 12, "desired_radius_mm": [15.0], "noise_weights": [1e-2], "n_training_sensors": 2,
+              "presses_per_sensor": 120, "n_estimators": 20}
+    model = fit_reconstruction("greit_learned", cfg, 3, cal.channels, cal.targets, params)
+    assert isinstance(model, GreitLearnedInverse)
+    assert 3 not in model.greit_.training_sensor_seeds()
+    voltages, _ = model.greit_.training_frames()
+    assert len(voltages) == 240 and not np.isin(cal.channels[:5], voltages).all()
+    prediction = model.predict(cal.channels)
+    assert prediction.shape == (len(cal.channels), 3) and np.isfinite(prediction).all()
+    with pytest.raises(InputError, match="among the training sensors"):
+        fit_reconstruction("greit", cfg, 10_001, cal.channels, cal.targets, params | {"training_seed": 10_000})
+
+
+def test_learned_study_trains_on_another_sensor_instance(compose_config, tmp_path):
+    from runs.studies.ert_learned import run_learned
+
+    cfg = compose_config(["experiment=ert_learned", *TINY])
+    with pytest.raises(InputError, match="one of the test sensors"):
+        run_learned(cfg, tmp_path, None, seeds=(0, 1), train_sensor_offset=1)
+    metrics = run_learned(cfg, tmp_path, None, seeds=(0,), n_train=96, recording_presses=48,
+                          models={"extra_trees": {"n_estimators": 5}}, train_sensor_offset=1000,
+                          calibration={"grid_points_per_side": 4, "n_force_levels": 3, "force_range_n": [2.0, 15.0]},
+                          reconstruction={"pixels_per_side": 8}, features="tikhonov_peak_window", half_width_px=1,
+                          train_force_range_n=[4.0, 12.0], conformal_on="held_out")
+    assert metrics["train_sensor_seeds"] == [1000] and metrics["seeds"] == [0]
+    assert metrics["summary"]["extra_trees"]["localisation_mm"]["mean"] > 0

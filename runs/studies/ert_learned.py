@@ -3,8 +3,11 @@
     python train.py experiment=ert_learned scene=ert_internal      (and scene=ert_boundary)
 
 Per seed (one simulated sensor): the Tikhonov reconstruction is calibrated on the `calibration`
-recording as in ert_localisation; the learned models train on `random` presses of the same
-sensor; all predict the same `single_point` test recording (324 points x `test_forces_n`).
+recording as in ert_localisation; the learned models train on `random` presses of sensor
+seed + `train_sensor_offset` (0: the same sensor; otherwise another simulated instance, with its
+own manufacturing spread: specimen variation, electrode position errors), passed through the
+test sensor's calibrated reconstruction; all predict the same `single_point` test recording
+(324 points x `test_forces_n`) of the sensor under test.
 
 The training presses come in recordings as long as the test recording (`recording_presses:
 test`), each with its own unloaded frame and baseline drift, so the models see many drift walks
@@ -121,7 +124,8 @@ def _fit_and_interval(name, params, cfg, seed, X, y, groups, fit, held, X_test, 
 def run_learned(cfg, output_dir, logger, seeds=(0, 1, 2), n_train=3000, models=None, test_forces_n=(4.0, 8.0, 12.0),
                 coverage=0.95, conformal_fraction=0.2, calibration=None, reconstruction=None,
                 features="voltages", half_width_px=2, recording_presses=None, train_force_range_n=None,
-                train_position_range_mm=(0.0, 200.0), conformal_on="held_out", n_conformal_recordings=5) -> dict:
+                train_position_range_mm=(0.0, 200.0), conformal_on="held_out", n_conformal_recordings=5,
+                train_sensor_offset=0) -> dict:
     output_dir = Path(output_dir)
     models = _plain(models) or {"extra_trees": {"n_estimators": 200}}
     unknown = [m for m in models if m not in (*FACTORIES, "blend")]
@@ -133,6 +137,9 @@ def run_learned(cfg, output_dir, logger, seeds=(0, 1, 2), n_train=3000, models=N
         raise InputError(f"ert_learned: conformal_on must be one of {', '.join(CONFORMAL_ON)}, got '{conformal_on}'")
     if conformal_on == "calibration_recordings" and int(n_conformal_recordings) < 1:
         raise InputError(f"ert_learned: n_conformal_recordings must be >= 1, got {n_conformal_recordings}")
+    if int(train_sensor_offset) and set(seeds) & {seed + int(train_sensor_offset) for seed in seeds}:
+        raise InputError(f"ert_learned: train_sensor_offset {train_sensor_offset} makes a training sensor one of the "
+                         f"test sensors {list(seeds)}")
     rows = []
     for seed in seeds:
         forces = sorted(float(f) for f in test_forces_n)
@@ -140,7 +147,7 @@ def run_learned(cfg, output_dir, logger, seeds=(0, 1, 2), n_train=3000, models=N
                          force_range_n=[forces[0], forces[-1]]).generate()
         extra = {} if train_force_range_n is None else {"force_range_n": list(_plain(train_force_range_n))}
         length = len(test.frame) if recording_presses == "test" else recording_presses
-        train = scene_for(cfg, seed=seed, protocol="random", n_samples=n_train,
+        train = scene_for(cfg, seed=seed + int(train_sensor_offset), protocol="random", n_samples=n_train,
                           position_range_mm=list(_plain(train_position_range_mm)), recording_presses=length,
                           **extra).generate()
         _, tikhonov = calibrate(cfg, seed, _plain(calibration) or {}, _plain(reconstruction) or {})
@@ -182,6 +189,7 @@ def run_learned(cfg, output_dir, logger, seeds=(0, 1, 2), n_train=3000, models=N
     atomic_write_text(output_dir / "learned_vs_tikhonov.csv", table.to_csv(index=False))
     best = min((m for m in models), key=lambda m: table[table.model == m].val_localisation_mm.mean())
     metrics = {"scene": cfg.scene.name, "seeds": list(seeds), "n_train": n_train, "features": features,
+               "train_sensor_seeds": [seed + int(train_sensor_offset) for seed in seeds],
                "conformal_on": conformal_on,
                "n_conformal_recordings": int(n_conformal_recordings) if conformal_on == "calibration_recordings" else None,
                "recording_presses": recording_presses,
