@@ -7,8 +7,10 @@ injections, the time to build the full pattern's Jacobian, and the ONNX reconstr
 Simulation: `random` presses through the scene's full effect list (and ert_minimal's), the
 sensor's solver already built (it is cached per process; its one-off build is reported apart).
 Jacobian: TikhonovReconstruction.jacobian() from scratch (the dense baseline inverse, the adjoint
-sensitivities, the four-terminal map). Reconstruction: onnxruntime, batch 1, one thread, median
-of --calls calls; the fit uses a small calibration (its size does not change the graph).
+sensitivities, the four-terminal map), and the sensitivity of the transfer matrix's 276 unique
+entries alone (models/ert/readings.py, what Gauss-Newton uses). Reconstruction: onnxruntime,
+batch 1, one thread, median of --calls calls, for Tikhonov, Gauss-Newton (20 x 20 pixels) and
+GREIT (48 x 48); the fits use a small calibration (its size does not change the graphs).
 """
 import argparse
 import sys
@@ -18,19 +20,27 @@ from pathlib import Path
 import numpy as np
 from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
+from omegaconf import OmegaConf
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from data.scenes import ert
-from export.reconstruction_graphs import tikhonov_to_onnx
+from export.reconstruction_graphs import linear_image_to_onnx, tikhonov_to_onnx
+from models.ert.gauss_newton import GaussNewtonReconstruction
+from models.ert.greit import GreitReconstruction
+from models.ert.readings import pixel_sensitivity
 from models.tikhonov_reconstruction import TikhonovReconstruction
 
 
-def scene(name: str, **overrides):
+def scene_node(name: str, **overrides) -> dict:
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
         cfg = compose("config", overrides=[f"scene={name}", "seed=0"] + [f"scene.{k}={v}" for k, v in overrides.items()])
-    return instantiate(cfg.scene)
+    return OmegaConf.to_container(cfg.scene, resolve=True)
+
+
+def scene(name: str, **overrides):
+    return instantiate(scene_node(name, **overrides))
 
 
 def main(argv=None):
@@ -42,8 +52,9 @@ def main(argv=None):
     args = parser.parse_args(argv)
     import onnxruntime as ort
 
-    print("| scene | solver build (s, once) | frames/s (276 injections x 24) | Jacobian (s) | ONNX reconstruction per frame (ms, p50) |")
-    print("|---|---|---|---|---|")
+    print("| scene | solver build (s, once) | frames/s (276 injections x 24) | Jacobian (s) "
+          "| Jacobian via Z (s, 20 x 20) | ONNX per frame (ms, p50): Tikhonov | Gauss-Newton | GREIT (48 x 48) |")
+    print("|---|---|---|---|---|---|---|---|")
     for name in args.scenes:
         ert.sheet_solver.cache_clear()
         s = scene(name, protocol="random", n_samples=args.frames)
@@ -65,18 +76,32 @@ def main(argv=None):
         model.fit(cal.channels, cal.targets)
         options = ort.SessionOptions()
         options.intra_op_num_threads = 1
-        session = ort.InferenceSession(tikhonov_to_onnx(model).SerializeToString(), options,
-                                       providers=["CPUExecutionProvider"])
         frame = cal.channels[:1].astype(np.float32)
-        for _ in range(50):
-            session.run(["prediction"], {"voltages": frame})
-        times = []
-        for _ in range(args.calls):
-            start = time.perf_counter()
-            session.run(["prediction"], {"voltages": frame})
-            times.append(time.perf_counter() - start)
+
+        def onnx_ms(proto):
+            session = ort.InferenceSession(proto.SerializeToString(), options, providers=["CPUExecutionProvider"])
+            for _ in range(50):
+                session.run(["prediction"], {"voltages": frame})
+            times = []
+            for _ in range(args.calls):
+                start = time.perf_counter()
+                session.run(["prediction"], {"voltages": frame})
+                times.append(time.perf_counter() - start)
+            return 1e3 * np.median(times)
+
+        geometry = s.geometry()
+        start = time.perf_counter()
+        pixel_sensitivity(geometry, 20)
+        sensitivity_s = time.perf_counter() - start
+        gauss_newton = GaussNewtonReconstruction(geometry=geometry, lambdas_relative=(1e-3,)).fit(cal.channels, cal.targets)
+        # the graph's size does not depend on how many presses GREIT trained on
+        greit = GreitReconstruction(geometry=geometry, training_scene=scene_node(name), n_training_sensors=1,
+                                    presses_per_sensor=50, desired_radius_mm=(20.0,),
+                                    noise_weights=(1e-3,)).fit(cal.channels, cal.targets)
         print(f"| {name} | {build_s:.2f} | {fps:.0f} | {jacobian_s:.2f} ({jacobian.shape[0]} x {jacobian.shape[1]}) "
-              f"| {1e3 * np.median(times):.3f} |")
+              f"| {sensitivity_s:.2f} | {onnx_ms(tikhonov_to_onnx(model)):.3f} "
+              f"| {onnx_ms(linear_image_to_onnx(gauss_newton)):.3f} | {onnx_ms(linear_image_to_onnx(greit)):.3f} |",
+              flush=True)
 
 
 if __name__ == "__main__":

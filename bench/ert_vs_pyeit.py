@@ -179,7 +179,12 @@ def main(argv=None):
     parser.add_argument("--greit-presses", type=int, default=600, help="training presses per simulated sensor")
     parser.add_argument("--methods", nargs="*", default=["pyeit_jac", "pyeit_greit", *RECONSTRUCTIONS])
     parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--table-from", nargs="*", type=Path, default=None,
+                        help="print the table from the --json files of earlier runs (e.g. methods run apart) and stop")
     args = parser.parse_args(argv)
+    if args.table_from:
+        print_table([row for path in args.table_from for row in json.loads(path.read_text())])
+        return 0
     try:
         import pyeit  # noqa: F401
     except ImportError:
@@ -221,19 +226,31 @@ def main(argv=None):
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))
     print(f"load average at end: {load():.2f}\n")
-    print("| layout | noise (V) | force (N) | method | localisation (mm, mean ± sd over seeds) | per-press sd (mm) "
-          "| set-up (s) | per frame (ms) |")
-    print("|---|---|---|---|---|---|---|---|")
+    print_table(rows)
+    return 0
+
+
+def print_table(rows):
+    """Mean +- sd over seeds per layout, noise, force and method; the ratio to the better pyEIT
+    method's mean (each method's own per-seed means averaged)."""
+    print("| layout | noise (V) | force (N) | method | localisation (mm, mean ± sd over seeds) | ÷ pyEIT's best "
+          "| per-press sd (mm) | set-up (s) | per frame (ms) |")
+    print("|---|---|---|---|---|---|---|---|---|")
     keys = sorted({(r["layout"], r["noise_v"], r["force_n"]) for r in rows})
     for layout, noise_v, force in keys:
+        here = [r for r in rows if (r["layout"], r["noise_v"], r["force_n"]) == (layout, noise_v, force)]
+        mean = {m: np.mean([r["localisation_mm"] for r in here if r["method"] == m]) for m in {r["method"] for r in here}}
+        peers = [v for m, v in mean.items() if m.startswith("pyeit")]
         for method in dict.fromkeys(r["method"] for r in rows):
-            part = [r for r in rows if (r["layout"], r["noise_v"], r["force_n"], r["method"]) == (layout, noise_v, force, method)]
+            part = [r for r in here if r["method"] == method]
+            if not part:
+                continue
             errors = np.array([r["localisation_mm"] for r in part])
             sd = errors.std(ddof=1) if len(errors) > 1 else 0.0
+            ratio = f"{errors.mean() / min(peers):.2f}" if peers else "–"
             print(f"| {layout} | {noise_v:g} | {force:g} | {method} | {errors.mean():.2f} ± {sd:.2f} (n={len(errors)}) "
-                  f"| {np.mean([r['localisation_sd_mm'] for r in part]):.2f} | {np.mean([r['setup_s'] for r in part]):.2f} "
-                  f"| {np.mean([r['ms_per_frame'] for r in part]):.3f} |")
-    return 0
+                  f"| {ratio} | {np.mean([r['localisation_sd_mm'] for r in part]):.2f} "
+                  f"| {np.mean([r['setup_s'] for r in part]):.2f} | {np.mean([r['ms_per_frame'] for r in part]):.3f} |")
 
 
 if __name__ == "__main__":
