@@ -32,6 +32,8 @@ from torch import nn
 KERNEL_LENGTH = 9
 KERNEL_POSITIONS = torch.tensor(list(itertools.combinations(range(KERNEL_LENGTH), 3)), dtype=torch.long)  # 84 x 3
 N_KERNELS = len(KERNEL_POSITIONS)
+PAIR_POSITIONS = torch.tensor(list(itertools.combinations(range(KERNEL_LENGTH), 2)), dtype=torch.long)  # 36 x 2
+KERNEL_PAIR = torch.tensor([PAIR_POSITIONS.tolist().index([a, b]) for a, b, _ in KERNEL_POSITIONS.tolist()])
 MIN_LENGTH = KERNEL_LENGTH
 GOLDEN_RATIO = (math.sqrt(5) + 1) / 2
 
@@ -72,7 +74,9 @@ class DilationGroup(nn.Module):
         shifts = (torch.arange(KERNEL_LENGTH) - KERNEL_LENGTH // 2)[None, :, None] * d[:, None, None]
         self.padding = 4 * max(dilations)
         self.register_buffer("shift_index", self.padding + shifts + torch.arange(length)[None, None, :])
-        self.register_buffer("kernel_positions", KERNEL_POSITIONS.clone())
+        self.register_buffer("pair_positions", PAIR_POSITIONS.clone())                 # 36 x 2
+        self.register_buffer("kernel_pair", KERNEL_PAIR.clone())                       # each kernel's (a, b) pair
+        self.register_buffer("kernel_last", KERNEL_POSITIONS[:, 2].clone())            # and its c
         self.register_buffer("channel_mask", torch.ones(n_channels, len(dilations), N_KERNELS, 1))
         self.register_buffer("biases", torch.zeros(len(dilations), N_KERNELS, count, 1))
         # the paper alternates, from the first dilation on, kernels pooled over the whole output and over the inner part
@@ -85,16 +89,19 @@ class DilationGroup(nn.Module):
 
     def convolutions(self, x: torch.Tensor) -> torch.Tensor:
         """The 84 kernels' outputs at each of the group's dilations on each kernel's channel
-        combination, zero-padded: [batch, dilations, 84, length]."""
+        combination, zero-padded: [batch, dilations, 84, length]. Kernel (a, b, c) is
+        (3 x_a + 3 x_b) + (3 x_c - sum_j x_j): the 36 pair sums and the nine `3 x_c - total` are
+        shared, so each of the 84 outputs costs one addition."""
         padded = nn.functional.pad(x, (self.padding, self.padding))
-        shifted = padded[:, :, self.shift_index]                     # [batch, channels, D, 9, length]
-        total = shifted[:, :, :, 0]
+        copies = padded[:, :, self.shift_index]                      # [batch, channels, D, 9, length]
+        total = copies[:, :, :, 0]
         for j in range(1, KERNEL_LENGTH):
-            total = total + shifted[:, :, :, j]
-        positions = self.kernel_positions
-        gamma = (shifted.index_select(3, positions[:, 0]) + shifted.index_select(3, positions[:, 1])
-                 + shifted.index_select(3, positions[:, 2]))
-        per_channel = 3 * gamma - total.unsqueeze(3)                 # [batch, channels, D, 84, length]
+            total = total + copies[:, :, :, j]
+        shifted = 3 * copies                                         # gamma = 3X
+        last = shifted - total.unsqueeze(3)                          # 3 x_c - sum_j x_j (alpha = -X)
+        pairs = shifted.index_select(3, self.pair_positions[:, 0]) + shifted.index_select(3, self.pair_positions[:, 1])
+        per_channel = (pairs.index_select(3, self.kernel_pair)
+                       + last.index_select(3, self.kernel_last))     # [batch, channels, D, 84, length]
         if self.n_channels == 1:
             return per_channel[:, 0]
         combined = per_channel[:, 0] * self.channel_mask[0]
