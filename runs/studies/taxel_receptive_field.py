@@ -4,15 +4,15 @@ sensor arrays* (the taxels paper) from the taxels scene.
     python train.py experiment=taxel_receptive_field
 
 Fig. 2: a needle scanned along x over one taxel (10 mN, 180 um cover): the strain components
-(gamma_x, gamma_y, eps_z) read back from the bridge voltages with eq. (2), for the semi-infinite
-model (eq. 1) and for the full scene (cover bonded to the chip, 100 um needle, the plate's size,
-amplifier, noise, ADC). Fig. 4: the eps_z profile's width W (between its zero crossings) and
+(gamma_x, gamma_y, eps_z) read back from the bridge voltages with eq. (2), for each cover model
+(experiment config `study.models`: eq. 1 at a point, the finite layers, eq. 1 over the taxel's
+membrane, and the full default chain with amplifier, noise and ADC). Fig. 4: the eps_z profile's width W (between its zero crossings) and
 amplitude A (|eps_z| under the load) against cover thickness, for each cover model, with the
 paper's measured laws beside them (its text gives the fitted slope of W, 1.14, and the exponent
 of A, -1.45, not the points; the lines are drawn through the model's value at the middle
 thickness so only their slopes compare). Writes receptive_field.png, thickness.png, the same
-figures to TensorBoard, profiles.csv and thickness.csv; the fitted slopes and exponents it
-returns go to metrics.json (no "val" key: nothing here is a validation score).
+figures to TensorBoard, profiles.csv and thickness.csv; the fitted slopes and exponents, the Fig. 2
+ratios and shear sensitivities (max |gamma_x| / max |eps_z|) it returns go to metrics.json (no "val" key: nothing here is a validation score).
 """
 from pathlib import Path
 
