@@ -8,8 +8,8 @@ a press on one side): the default blend's three candidates (resmlp, random fores
 are fitted three ways on the same training rows: K-fold blended (the default, K = data.n_folds),
 once on all rows, and as a seed ensemble of K members on all rows. Each set is blended by the
 paper's validation weights (the one rule all three can use), the K-fold set by stacking too
-(the default). Prints validation and test R^2 per target as mean ± sd over splits, the fit time
-of each, and the load average before and after.
+(the default). Prints validation and test R^2 per target as mean ± sd over splits, the fit CPU
+time of each (wall time depends on other work), and the load average before and after.
 """
 import argparse
 import os
@@ -25,6 +25,7 @@ from sklearn.metrics import r2_score
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.threads import apply_threads  # noqa: E402
 from models.kfold_blend import KFoldBlend  # noqa: E402
 from models.weighted_blend import ValidationWeightedBlend  # noqa: E402
 from runs.run import seed_everything  # noqa: E402
@@ -53,9 +54,9 @@ def one_split(seed: int, overrides: list[str]) -> dict:
     }
     rows, seconds = {}, {}
     for kind, blend in sets.items():
-        start = time.perf_counter()
+        start = time.process_time()
         blend.fit(X, y, X_val, y_val, groups=groups)
-        seconds[kind] = time.perf_counter() - start
+        seconds[kind] = time.process_time() - start
         rows[f"{kind} blend, weights={blend.weights}"] = blend
         if kind == "kfold":
             rows["kfold blend, weights=paper"] = blend.reweighted("paper")
@@ -63,7 +64,7 @@ def one_split(seed: int, overrides: list[str]) -> dict:
             rows[f"{name} {kind}"] = member
     result = {name: {"val": scores(y_val, m.predict(X_val).reshape(y_val.shape)),
                      "test": scores(y_test, m.predict(X_test).reshape(y_test.shape))} for name, m in rows.items()}
-    print(f"split {seed}: fit seconds {', '.join(f'{k} {v:.1f}' for k, v in seconds.items())}; "
+    print(f"split {seed}: fit CPU seconds {', '.join(f'{k} {v:.1f}' for k, v in seconds.items())}; "
           f"load {os.getloadavg()[0]:.2f}", file=sys.stderr, flush=True)
     return result, datamodule.target_names, seconds
 
@@ -73,6 +74,7 @@ def main(argv=None):
     parser.add_argument("--splits", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     parser.add_argument("overrides", nargs="*")
     args = parser.parse_args(argv)
+    apply_threads(1)   # as train.py's default: one thread per process, so load from other work costs least
     print(f"load average before: {os.getloadavg()}")
     results, seconds = [], []
     for seed in args.splits:
@@ -91,7 +93,7 @@ def main(argv=None):
             print(f"| {name} | {part} | {' | '.join(cells)} |")
     for kind in seconds[0]:
         values = np.array([s[kind] for s in seconds])
-        print(f"fit seconds {kind}: {values.mean():.1f} ± {values.std(ddof=1):.1f}")
+        print(f"fit CPU seconds {kind}: {values.mean():.1f} ± {values.std(ddof=1):.1f}")
 
 
 if __name__ == "__main__":

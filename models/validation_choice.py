@@ -108,7 +108,7 @@ class ValidationChoice(BaseEstimator):
             return np.asarray(model.predict(X), dtype=np.float64)
         proba = np.zeros((len(X), len(self.classes_)))
         proba[:, np.searchsorted(self.classes_, model.classes_)] = model.predict_proba(X)
-        return proba
+        return proba / proba.sum(axis=1, keepdims=True)   # a float32 net's rows sum to 1 only up to rounding
 
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
         self._check_params()

@@ -14,8 +14,10 @@ A table's classifier has its probabilities calibrated on the held-out rows no mo
 temperature scaling; with fewer than MIN_CALIBRATION_ROWS it stays uncalibrated, and the log and
 metrics.json say so. Its model: a TableClassifier config (model=logistic_regression, model=mlp)
 as it is; a tree config (model=extra_trees, random_forest, decision_tree) as the classifier of
-that kind with the same settings; the default pipeline (model=blend, which only regresses) as
-the recipe's `classifier` (recipe/blend.yaml: extra trees). Other regressors are refused by name.
+that kind with the same settings; the default (model=auto) as the choice on validation among its
+classification candidates (models/validation_choice.py), recordings among its recordings
+candidates; model=blend, which only regresses, as the recipe's `classifier` (recipe/blend.yaml:
+extra trees). Other regressors are refused by name.
 """
 import logging
 import time
@@ -29,14 +31,17 @@ from omegaconf import OmegaConf
 from common.errors import InputError
 from models.classic_classifiers import TableClassifier
 from models.deployable import table_classifier_pipeline, timeseries_pipeline
+from models.validation_choice import ValidationChoice
 from runs.report.classification_report import write_classification_report
+from runs.regression import chosen
 from runs.report.metrics import classification_metrics
 
 log = logging.getLogger(__name__)
 MIN_CALIBRATION_ROWS = 20   # fewer: a temperature fitted on them is noise; probabilities stay as the classifier gives them
 TABLE_CLASSIFIER = "models.classic_classifiers.TableClassifier"
 TREES = "models.trees.TreeRegressor"
-REGRESSION_ONLY = "models.weighted_blend.ValidationWeightedBlend"   # the default pipeline: its recipe names a classifier
+REGRESSION_ONLY = "models.weighted_blend.ValidationWeightedBlend"   # model=blend: its recipe names a classifier
+CHOICE = "models.validation_choice.ValidationChoice"                 # model=auto: its classification candidates
 
 
 @dataclass
@@ -67,6 +72,8 @@ def checkpoint_folder(output_dir) -> Path:
 def table_classifier(cfg) -> TableClassifier:
     """The classifier a classification table fits for the configured model (the module docstring)."""
     node = cfg.model
+    if node.get("_target_") == CHOICE:
+        return instantiate(node)
     if node.get("_target_") == REGRESSION_ONLY and cfg.get("classifier") is not None:
         node = cfg.classifier
     target = node.get("_target_")
@@ -128,6 +135,11 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
                          "rescnn, inceptiontime or lstm_fcn")
     else:
         model = instantiate(cfg.model)
+    choice = model if isinstance(model, ValidationChoice) else None   # model=auto: chosen on validation
+    if choice is not None:
+        chosen(choice.set_params(task="classification" if table else "recordings"))
+        if not table:
+            choice.set_candidate_params(modalities=datamodule.modality_channels)
     if "modalities" in model.get_params():
         model.set_params(modalities=datamodule.modality_channels)
     if "checkpoint_path" in model.get_params():  # resumable training (docs/training_recipes.md)
@@ -141,6 +153,8 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
         model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback,
                   **_recording_groups(model, datamodule))
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
+    if choice is not None:   # from here on the run reports and deploys the chosen candidate
+        model = chosen(choice)
     if "checkpoint_path" in model.get_params():  # the deployed model refits from scratch, never from this run's files
         model.set_params(checkpoint_path=None, resume_from=None)
     calibration = _calibrate(model, datamodule) if table else None
@@ -169,6 +183,8 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
                "data": summary}
     if calibration is not None:
         metrics["calibration"] = calibration
+    if choice is not None:
+        metrics["choice"] = choice.report()
     if hasattr(model, "best_epoch_"):  # the epoch kept (best on validation), of how many run, at what batch
         metrics["training"] = {"epochs_run": model.n_epochs_, "best_epoch": model.best_epoch_,
                                "batch_size": model.batch_size_, "epoch_selection": model.epoch_selection}

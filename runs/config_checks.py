@@ -167,7 +167,7 @@ TRAINER = {
 # sign is export/latency.py's to refuse, where the measurement starts.
 SETTINGS = {"seed": SEED, "overwrite": FLAG, "cost.budget_s": number(), "cost.measure_latency": FLAG,
             "cost.onnx_latency_calls": integer(0),
-            "analysis.ablation": FLAG, "analysis.progress": FLAG, "analysis.identifiability_bins": integer(1),
+            "spread.splits": integer(1), "analysis.ablation": FLAG, "analysis.progress": FLAG, "analysis.identifiability_bins": integer(1),
             "export.enabled": FLAG, "export.opset": integer(1), "export.file": text(), "augment.enabled": FLAG}
 # A parameter of one of our targets with one of these names takes these values wherever it
 # appears: the trainer's settings reach the nets under their own names, the splits the datamodules.
@@ -420,14 +420,15 @@ TABLE_ONLY_MODEL = "models.weighted_blend.ValidationWeightedBlend"
 
 
 def check_model_fits_data(cfg: DictConfig) -> None:
-    """The default model (the blend) learns from one row per press; recordings need a network
-    over windows. Said before composing the rest, whose first symptom would be a key the blend
-    reads from table data (data.n_folds)."""
+    """model=blend learns from one row per press; recordings need a model over windows. Said
+    before composing the rest, whose first symptom would be a key the blend reads from table data
+    (data.n_folds)."""
     data_target = OmegaConf.select(cfg, "data._target_", default=None)
     model_target = OmegaConf.select(cfg, "model._target_", default=None)
     if data_target in TIME_SERIES_DATA and model_target == TABLE_ONLY_MODEL:
-        raise InputError("model=blend (the default) learns from tables, one row per press; recordings train a "
-                         "time-series network: add model=prcnn (or rescnn, inceptiontime, lstm_fcn)")
+        raise InputError("model=blend learns from tables, one row per press; recordings train a time-series "
+                         "model: leave model= out (model=auto chooses one on validation) or name one (model=prcnn, "
+                         "rescnn, inceptiontime, lstm_fcn)")
 
 
 def check_config(cfg: DictConfig, overrides=()) -> list[str]:

@@ -12,11 +12,13 @@ from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
 
 from common.errors import InputError
-from common.progress import phase
+from common.progress import phase, progress
 from data.units import clip_columns
 from models.deployable import RegressionPipeline, regression_pipeline
+from models.validation_choice import ValidationChoice
 from runs.report.analysis import edge_vs_centre, feature_ablation, identifiability_map, interval_report
 from runs.report.metrics import regression_metrics
+from runs.report.metrics_file import mean_sd
 from runs.report.regression_report import write_regression_report
 
 log = logging.getLogger(__name__)
@@ -85,13 +87,23 @@ def _importances(model):
     return None
 
 
-def _ablation_estimator(model, cfg):
-    """The selected candidate, unblended, so the ablation costs one fit per feature group."""
+def _ablation_estimator(model, node):
+    """The selected candidate, unblended, so the ablation costs one fit per feature group; `node`
+    is the fitted model's config."""
     if hasattr(model, "selected_"):
         name = model.selected_()
-        candidate = cfg.model.candidates[name]
+        candidate = node.candidates[name]
         return name, instantiate(candidate.get("estimator", candidate))
-    return type(model).__name__, instantiate(cfg.model)
+    return type(model).__name__, instantiate(node)
+
+
+def chosen(choice: ValidationChoice):
+    """The candidate a fitted choice deploys (None before fitting); a choice that may pick a
+    mixture of candidates is refused, before any fitting when called then."""
+    if choice.ensemble:
+        raise InputError("model.ensemble=true: a mixture of candidates is not exported as one ONNX graph yet; "
+                         "set model.ensemble=false")
+    return choice.chosen_model_ if hasattr(choice, "chosen_") else None
 
 
 def _hparams(cfg: DictConfig) -> dict:
@@ -113,12 +125,18 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
         raise InputError(f"model.kind={cfg.model.kind} classifies, but {datamodule.table.source_name}'s target(s) "
                          f"{', '.join(targets)} are quantities (regression): choose a regression model, or set "
                          "data.task=classification for a class label")
-    model = instantiate(cfg.model)
+    model, node = instantiate(cfg.model), cfg.model
+    choice = model if isinstance(model, ValidationChoice) else None
+    if choice is not None:
+        choice.set_params(task="regression")
+        chosen(choice)
     groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split in ("grouped", "predefined") else None
 
     start, cpu_start = time.perf_counter(), time.process_time()
     model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
+    if choice is not None:   # from here on the run reports and deploys the chosen candidate
+        model, node = chosen(choice), cfg.model.candidates.regression[choice.chosen_]
 
     def predict(X):
         """(n, n_targets) even for one target (scikit-learn returns a vector), within each target's
@@ -137,11 +155,15 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
                  **_fold_costs(model)},
         "data": datamodule.summary(),
     }
+    if choice is not None:
+        metrics["choice"] = choice.report()
     warnings = _fold_warnings(model)
     if warnings:
         metrics["warnings"] = warnings
     result = RegressionResult(metrics, targets, datamodule.test_idx, y_test, pred_test,
                               regression_pipeline(datamodule, model), hparams=_hparams(cfg))
+    if choice is not None:
+        result.hparams["model.chosen"] = choice.chosen_
 
     if hasattr(model, "weights_"):
         metrics["selection"] = _selection_report(model, targets)
@@ -171,11 +193,40 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
                               targets + [datamodule.feature_names[i] for i in top])
         metrics["top_features"] = {datamodule.feature_names[i]: float(values[i]) for i in top}
 
+    splits = cfg.get("spread", {}).get("splits", 1)
+    if splits > 1:
+        with phase(f"scores over {splits} splits ({type(model).__name__} refitted on each)"):
+            metrics["spread"] = split_spread(node, datamodule, metrics, splits)
+
     if analysis.get("ablation", False):
-        name, estimator = _ablation_estimator(model, cfg)
+        name, estimator = _ablation_estimator(model, node)
         metrics["ablation"] = {"model": name, **feature_ablation(estimator, datamodule,
                                                                     progress=analysis.get("progress", True))}
     return result
+
+
+def split_spread(node, datamodule, first: dict, splits: int) -> dict:
+    """Validation and test scores per target over `splits` draws of the split: this run's own (its
+    `first` metrics) and splits - 1 more (datamodule.resplit, grouped as this one), the model of
+    `node` refitted on each. One fit per split: a choice is made and intervals are calibrated
+    on this run's split only; the exported model is this run's."""
+    if datamodule.split == "predefined":
+        return {"splits": 1, "note": "the data declares its split (data.declared_split=ignore draws others)"}
+    runs, seeds = [first], [datamodule.seed]
+    for k in progress(range(1, splits), desc="splits", unit="splits"):
+        other = datamodule.resplit(datamodule.seed + k)
+        groups = other.table.groups[other.train_idx] if other.split == "grouped" else None
+        model = instantiate(node)
+        model.fit(*other.train, *other.val, groups=groups)
+        runs.append({part: regression_metrics(y, clip_columns(model.predict(X), other.target_names), other.target_names)
+                     for part, (X, y) in (("val", other.val), ("test", other.test))})
+        seeds.append(other.seed)
+    names = [*datamodule.target_names, "average"]
+    spread = {"splits": len(runs), "split": datamodule.split, "split_seeds": seeds}
+    for part in ("val", "test"):
+        spread[part] = {t: {m: mean_sd([r[part][t][m] for r in runs]) for m in first[part][t]
+                            if all(r[part][t][m] is not None for r in runs)} for t in names}
+    return spread
 
 
 def run_regression(cfg: DictConfig, output_dir: str | Path, datamodule, logger):

@@ -77,7 +77,7 @@ def check_error(overrides) -> str:
     (["cost.budget_s=abc"], "cost.budget_s must be a number, got 'abc'"),
     (["export.opset=abc"], "export.opset must be an integer >= 1, got 'abc'"),
     (["experiment=materials10", "model=blend"],
-     "model=blend (the default) learns from tables, one row per press; recordings train a time-series network"),
+     "model=blend learns from tables, one row per press; recordings train a time-series model"),
 ])
 def test_a_wrong_setting_is_named_with_its_value_and_what_it_takes(overrides, message):
     error = check_error(overrides)

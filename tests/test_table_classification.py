@@ -71,9 +71,23 @@ def test_every_row_classifier_trains_and_exports(compose_config, tmp_path, model
     np.testing.assert_allclose(onnx_proba, load_pipeline(run_dir / "pipeline.npz").predict_raw(readings), atol=1e-4)
 
 
-def test_the_default_model_classifies_with_extra_trees_not_the_regression_blend(compose_config, tmp_path):
-    metrics, _ = table_run(compose_config, tmp_path, pads(n=150), "classifier.n_estimators=20")
+def test_model_blend_classifies_with_extra_trees_not_the_regression_blend(compose_config, tmp_path):
+    metrics, _ = table_run(compose_config, tmp_path, pads(n=150), "model=blend", "classifier.n_estimators=20")
     assert metrics["model"] == "TableClassifier(extra_trees)"
+
+
+def test_the_default_model_chooses_among_the_table_classifiers_on_validation(compose_config, tmp_path):
+    metrics, run_dir = table_run(compose_config, tmp_path, pads(n=150),
+                                 "model.candidates.classification.extra_trees.n_estimators=10",
+                                 "model.candidates.classification.random_forest.n_estimators=10")
+    choice = metrics["choice"]
+    assert choice["task"] == "classification" and set(choice["validation"]) == {
+        "logistic_regression", "mlp", "extra_trees", "random_forest"}
+    best = max(choice["validation"].values(), key=lambda s: s["accuracy"])["accuracy"]
+    assert choice["validation"][choice["chosen"]]["accuracy"] == best
+    assert metrics["model"] == f"TableClassifier({choice['chosen']})"
+    assert metrics["val"]["accuracy"] == choice["validation"][choice["chosen"]]["accuracy"]
+    assert json.loads((run_dir / "metrics.json").read_text())["choice"]["reason"].startswith(f"chose {choice['chosen']}")
 
 
 def test_an_integer_coded_target_is_a_class_label_and_the_task_can_be_forced(compose_config, tmp_path):

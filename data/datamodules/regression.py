@@ -19,6 +19,7 @@ same steps; `task` says which it is, `y` holds class codes and `classes` their n
 class of the validation, calibration and test rows must have training rows (a classifier cannot
 learn a class it never sees), checked before any fitting.
 """
+import copy
 import logging
 
 import numpy as np
@@ -86,6 +87,19 @@ class RegressionDataModule:
         with phase(f"features of {len(self.y):,} rows", enabled=len(self.y) >= LARGE_TABLE_ROWS):
             self.X, self.scaler = self.features_for(self.features)
         return self
+
+    def resplit(self, seed: int) -> "RegressionDataModule":
+        """The same rows drawn into another train/validation/calibration/test split (the split's
+        kind, grouped by default, and fractions as this one's; `seed` draws it) with its own
+        scaler: the repeated splits a run's spread is measured over. A declared split has one
+        draw only, and is refused."""
+        if self.split == "predefined":
+            raise InputError(f"{self.table.source_name} declares its split; there is no other split to draw")
+        other = copy.copy(self)
+        other.seed = seed
+        other._drawn_split(self.table)
+        other.X, other.scaler = other.features_for(self.features)
+        return other
 
     def _predefined_split(self, table: SensorTable) -> None:
         """The table's declared sides; calibration is carved from its train rows, grouped."""

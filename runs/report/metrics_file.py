@@ -54,6 +54,10 @@ def write_metrics(output_dir, metrics: dict, logger=None) -> Path:
     """Write metrics.json atomically; a study's numbers also go to TensorBoard (`results/...`)
     and a short summary to the console (the pipelines' reports log their own tables)."""
     path = atomic_write_json(Path(output_dir) / METRICS_FILE, json_safe(metrics))
+    if "choice" in metrics and logger is not None:   # what the default model chose and why (models/validation_choice.py)
+        logger.log_text("choice/reason", metrics["choice"]["reason"])
+        for tag, value in numbers(metrics["choice"]["validation"], "choice/validation"):
+            logger.writer_.add_scalar(tag, value)
     if "study" in metrics:
         found = list(numbers({k: v for k, v in metrics.items() if k != "study"}))
         if logger is not None:

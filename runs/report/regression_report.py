@@ -43,9 +43,18 @@ def _log_to_tensorboard(logger, result, figures) -> None:
         if split.startswith("coverage_"):
             for target, value in values.items():
                 logger.writer_.add_scalar(f"uncertainty/{split}/{target}", value)
-    logger.log_hparams(result.hparams, {"hparam/val_r2": metrics["val"]["average"]["r2"],
-                                        "hparam/test_r2": metrics["test"]["average"]["r2"],
-                                        "hparam/fit_time_s": metrics["fit_time_s"]})
+    final = {"hparam/val_r2": metrics["val"]["average"]["r2"], "hparam/test_r2": metrics["test"]["average"]["r2"],
+             "hparam/fit_time_s": metrics["fit_time_s"]}
+    spread = metrics.get("spread", {})
+    for part in ("val", "test"):
+        for target, scores in spread.get(part, {}).items():
+            for name, value in scores.items():
+                logger.writer_.add_scalar(f"spread/{part}/{target}/{name}_mean", value["mean"])
+                logger.writer_.add_scalar(f"spread/{part}/{target}/{name}_sd", value["sd"])
+    if "test" in spread:
+        final["hparam/test_r2_mean_over_splits"] = spread["test"]["average"]["r2"]["mean"]
+        final["hparam/test_r2_sd_over_splits"] = spread["test"]["average"]["r2"]["sd"]
+    logger.log_hparams(result.hparams, final)
 
 
 def _predictions_frame(result) -> pd.DataFrame:
@@ -66,6 +75,12 @@ def _predictions_frame(result) -> pd.DataFrame:
 
 def _log_summary(metrics, output_dir) -> None:
     log.info("%s fitted in %.2f s\n%s", metrics["model"], metrics["fit_time_s"], format_table(metrics))
+    if "choice" in metrics:
+        log.info("model choice: %s", metrics["choice"]["reason"])
+    if "test" in metrics.get("spread", {}):
+        spread = metrics["spread"]
+        log.info("test R2 over %d %s splits (mean ± sd): %s", spread["splits"], spread["split"],
+                 ", ".join(f"{t} {v['r2']['mean']:.3f} ± {v['r2']['sd']:.3f}" for t, v in spread["test"].items()))
     for warning in metrics.get("warnings", []):
         log.warning(warning)
     if "selection" in metrics:

@@ -118,6 +118,9 @@ class TensorBoardLogger:
         for tag, value in final.items():
             self.writer_.add_scalar(tag, value)
 
+    def log_text(self, tag: str, text: str) -> None:
+        self.writer_.add_text(tag, text)
+
     def log_figure(self, tag: str, figure) -> None:
         self.writer_.add_figure(tag, figure, close=False)
 

@@ -1,0 +1,67 @@
+"""The default model (model=auto) in whole runs: on a scene it chooses among the regression
+variants on validation and reports its scores over repeated grouped splits while exporting one
+model; on recordings it chooses a time-series model within the budget and says what it skipped."""
+import json
+
+import numpy as np
+import pandas as pd
+import pytest
+
+from runs.run import run
+
+TINY_REGRESSION = ["scene.n_samples=120", "scene.grid_nodes=21", "scene.progress=false", "trainer.max_epochs=3",
+                   "trainer.progress=false", "data.n_folds=2",
+                   "model.candidates.regression.kfold_blend.candidates.random_forest.estimator.n_estimators=5",
+                   "model.candidates.regression.kfold_blend.candidates.extra_trees.estimator.n_estimators=5"]
+
+
+def test_the_default_run_chooses_on_validation_and_reports_its_spread_over_grouped_splits(compose_config, tmp_path):
+    metrics = run(compose_config([*TINY_REGRESSION, "spread.splits=2"]), tmp_path)
+    choice, spread = metrics["choice"], metrics["spread"]
+    assert choice["task"] == "regression" and set(choice["validation"]) == {"resmlp", "resmlp_seeds", "kfold_blend"}
+    best = max(choice["validation"].values(), key=lambda s: s["r2"])["r2"]
+    assert choice["validation"][choice["chosen"]]["r2"] == best
+    assert metrics["val"]["average"]["r2"] == pytest.approx(best)   # the reported model is the chosen one
+    assert spread["splits"] == 2 and spread["split"] == "grouped" and spread["split_seeds"] == [0, 1]
+    for target in ("x_mm", "y_mm", "depth_mm", "pressure_pa"):
+        r2 = spread["test"][target]["r2"]
+        assert r2["n"] == 2
+        # two values: each lies sd / sqrt(2) from their mean, this run's own among them
+        assert abs(metrics["test"][target]["r2"] - r2["mean"]) == pytest.approx(r2["sd"] / np.sqrt(2), abs=1e-9)
+    written = json.loads((tmp_path / "metrics.json").read_text())
+    assert written["spread"]["test"]["average"]["r2"]["n"] == 2 and written["choice"]["chosen"] == choice["chosen"]
+    assert (tmp_path / "model.onnx").is_file()
+
+
+def test_a_declared_split_has_no_other_draws_to_spread_over(compose_config, tmp_path):
+    rng = np.random.default_rng(0)
+    n = 90
+    frame = pd.DataFrame({"r_ohm": rng.uniform(900, 1100, n), "s_ohm": rng.uniform(900, 1100, n)})
+    frame["depth_mm"] = (frame.r_ohm - 900) / 100 + 0.05 * rng.uniform(0, 1, n)
+    frame["split"] = np.where(np.arange(n) < 60, "train", np.where(np.arange(n) < 75, "val", "test"))
+    frame.to_csv(tmp_path / "rig.csv", index=False)
+    cfg = compose_config(["data=table", f"data.path={tmp_path / 'rig.csv'}", "data.target_columns=[depth_mm]",
+                          "model=extra_trees", "model.n_estimators=5", "spread.splits=3"])
+    metrics = run(cfg, tmp_path / "run")
+    assert metrics["spread"]["splits"] == 1 and "declares its split" in metrics["spread"]["note"]
+
+
+def recordings(path, n=24, steps=64):
+    """Two classes of tones, one channel: a net tells them apart in a few epochs."""
+    rng = np.random.default_rng(0)
+    t = np.arange(steps) / steps
+    y = np.arange(n) % 2
+    X = np.sin(2 * np.pi * (2 + 4 * y)[:, None] * t + rng.uniform(0, 6, (n, 1)))[:, None, :]
+    np.savez(path, X=(X + 0.2 * rng.standard_normal(X.shape)).astype(np.float32), y=np.array(["low", "high"])[y])
+    return path
+
+
+def test_recordings_without_a_model_train_the_choice_within_its_budget(compose_config, tmp_path):
+    path = recordings(tmp_path / "rig.npz")
+    cfg = compose_config(["data=recordings_npz", f"data.path={path}", "trainer.max_epochs=2", "trainer.progress=false",
+                          "model.budget_s=0.001"])   # the cheapest always runs; nothing else fits in the budget
+    metrics = run(cfg, tmp_path / "run")
+    choice = metrics["choice"]
+    assert choice["task"] == "recordings" and choice["chosen"] == "prcnn"
+    assert list(choice["skipped"]) == ["rescnn"] and "model.budget_s=0.001" in choice["skipped"]["rescnn"]
+    assert metrics["model"] == "PRCNN" and (tmp_path / "run" / "model.onnx").is_file()
