@@ -62,6 +62,10 @@ def _job_row(name: str, folder: Path) -> dict:
     row["eager_latency_p50_us"] = latency.get("eager", {}).get("p50")
     row["model_size_bytes"] = cost.get("model_size_bytes", np.nan)
     row["n_parameters"] = cost.get("n_parameters", cost.get("n_nodes"))
+    over_splits = metrics.get("spread", {}).get("test", {}).get("average", {}).get("r2")
+    if over_splits is not None:   # a regression job scored over repeated splits (spread.splits)
+        row["test_splits_mean"], row["test_splits_sd"] = over_splits["mean"], over_splits["sd"]
+        row["n_splits"] = over_splits["n"]
     return row
 
 
@@ -143,6 +147,10 @@ def summarise(jobs: pd.DataFrame) -> pd.DataFrame:
             values = pd.to_numeric(group[column], errors="coerce")
             row[f"{column}_mean"] = values.mean()
             row[f"{column}_sd"] = values.std(ddof=1) if len(values) > 1 else np.nan
+        if "test_splits_mean" in group:   # over each job's splits: the mean of means, the sds pooled
+            row["test_splits_mean"] = pd.to_numeric(group["test_splits_mean"], errors="coerce").mean()
+            row["test_splits_sd"] = np.sqrt((pd.to_numeric(group["test_splits_sd"], errors="coerce") ** 2).mean())
+            row["n_splits"] = pd.to_numeric(group["n_splits"], errors="coerce").max()
         rows.append(row)
     frame = pd.DataFrame(rows)
     if frame.empty:
@@ -167,14 +175,22 @@ def markdown(summary: pd.DataFrame, jobs: pd.DataFrame, parallel_warning: bool, 
     if parallel_warning:
         lines += ["> Jobs ran in parallel: they competed for the cores, so fit times and latencies are",
                   "> perturbed. Rerun the sweep with the basic launcher to compare timings.", ""]
-    lines += ["Mean ± sd over each configuration's seeds.", "",
-              "| configuration | seeds | validation | test (reporting only) | fit time (s) | latency p50 (µs) "
+    splits = "test_splits_mean" in summary and np.isfinite(summary["test_splits_mean"].astype(float)).any()
+    lines += ["Mean ± sd over each configuration's seeds" + (
+              "; test over splits: each job refitted on repeated splits of its data (spread.splits), "
+              "the mean of the jobs' means ± their pooled sd." if splits else "."), "",
+              "| configuration | seeds | validation | test (reporting only) | "
+              + ("test over splits | " if splits else "") + "fit time (s) | latency p50 (µs) "
               "| size (MB) | Pareto: fit | Pareto: latency |",
-              "|---|---|---|---|---|---|---|---|---|"]
+              "|---|---|---|---|---|---|---|---|---|" + ("---|" if splits else "")]
     for _, r in summary.iterrows():
         size = f"{r['model_size_bytes_mean'] / 1e6:.1f}" if np.isfinite(r["model_size_bytes_mean"]) else "—"
+        over_splits = ""
+        if splits:
+            over_splits = (f"{r['test_splits_mean']:.4f} ± {r['test_splits_sd']:.4f} ({int(r['n_splits'])} splits) | "
+                           if np.isfinite(r["test_splits_mean"]) else "— | ")
         lines.append(f"| {r['label']} | {r['n_seeds']} | {_mean_sd(r, 'val_score', '.4f')} "
-                     f"| {_mean_sd(r, 'test_score', '.4f')} | {_mean_sd(r, 'fit_time_s', '.2f')} "
+                     f"| {_mean_sd(r, 'test_score', '.4f')} | {over_splits}{_mean_sd(r, 'fit_time_s', '.2f')} "
                      f"| {_mean_sd(r, 'latency_p50_us', ',.0f')} | {size} "
                      f"| {'★' if r['pareto_fit_time'] else ''} | {'★' if r['pareto_latency'] else ''} |")
     failed = jobs[jobs["status"] != "ok"]
