@@ -14,7 +14,7 @@ from common.errors import InputError
 from export.pipelines import export_pipeline
 from models.deployable import TimeSeriesPipeline, load_pipeline, save_pipeline
 from models.rocket.classifier import RocketClassifier
-from models.rocket.minirocket import MiniRocket, dilations_and_features, quantiles
+from models.rocket.minirocket import MiniRocket, dilations_and_features, linear_quantiles, quantiles
 from models.rocket.ridge_loo import ALPHAS, class_indicators, ridge_loo
 
 
@@ -84,6 +84,9 @@ def test_dilations_follow_the_paper():
     assert dilations == sorted(set(dilations))
     assert dilations_and_features(9, 10_000) == ([1], [119])
     np.testing.assert_allclose(quantiles(3), [0.6180339887, 0.2360679775, 0.8541019662], atol=1e-9)
+    rows, levels = np.random.default_rng(0).standard_normal((5, 7, 30)), np.random.default_rng(1).uniform(size=(5, 7, 4))
+    expected = [[np.quantile(rows[i, j], levels[i, j]) for j in range(7)] for i in range(5)]
+    np.testing.assert_allclose(linear_quantiles(rows, levels), expected, rtol=1e-12, atol=1e-12)
 
 
 def test_non_finite_and_short_windows_are_refused():

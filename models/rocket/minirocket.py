@@ -58,6 +58,17 @@ def quantiles(n: int) -> np.ndarray:
     return (np.arange(1, n + 1) * GOLDEN_RATIO) % 1
 
 
+def linear_quantiles(values: np.ndarray, levels: np.ndarray) -> np.ndarray:
+    """np.quantile's default (linear) method row by row, each row at its own levels:
+    values [..., length], levels [..., count] -> [..., count]."""
+    ordered = np.sort(values, axis=-1)
+    position = levels * (values.shape[-1] - 1)
+    below = np.floor(position).astype(np.int64)
+    above = np.minimum(below + 1, values.shape[-1] - 1)
+    low, high = np.take_along_axis(ordered, below, -1), np.take_along_axis(ordered, above, -1)
+    return low + (high - low) * (position - below)
+
+
 class DilationGroup(nn.Module):
     """The dilations that have the same number of features per kernel, computed at once:
     windows [batch, channels, length] -> their PPV features [batch, dilations x 84 x count].
@@ -111,7 +122,12 @@ class DilationGroup(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         pooled = (self.convolutions(x) + self.pool_offset).unsqueeze(3)          # [batch, D, 84, 1, length]
-        counts = (pooled > self.biases).float().sum(-1)                          # [batch, D, 84, count]
+        if torch.jit.is_tracing():   # export/torch_graphs.to_onnx traces
+            positive = (pooled > self.biases).float()                            # Greater, Cast
+        else:  # the same 0/1 written straight as float: torch's bool-to-float cast took 2/3 of the transform
+            shape = (pooled.shape[0], *self.biases.shape[:3], pooled.shape[-1])     # [batch, D, 84, count, length]
+            positive = torch.gt(pooled, self.biases, out=torch.empty(shape))
+        counts = positive.sum(-1)                                                # [batch, D, 84, count]
         return (counts * self.pool_scale).flatten(1)
 
 
@@ -170,8 +186,7 @@ class MiniRocket(nn.Module):
                     for e in range(outputs.shape[0]):
                         mine = where == s + e
                         own[mine] = outputs[e][mine]
-            for j in range(n):
-                levels = sequence[starts[i + j]:starts[i + j + 1]].reshape(N_KERNELS, group.count)
-                biases = np.stack([np.quantile(own[j, k].numpy(), levels[k]) for k in range(N_KERNELS)])
-                group.biases[j, :, :, 0] = torch.from_numpy(biases.astype(np.float32))
+            levels = np.stack([sequence[starts[i + j]:starts[i + j + 1]].reshape(N_KERNELS, group.count)
+                               for j in range(n)])                                   # [D, 84, count]
+            group.biases[..., 0] = torch.from_numpy(linear_quantiles(own.numpy(), levels).astype(np.float32))
             i += n
