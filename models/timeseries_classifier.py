@@ -17,7 +17,8 @@ by more than `early_stopping_min_delta`) came for `patience(epoch of the last on
 again as it took to get there, between `early_stopping_min_patience` and `early_stopping_patience`.
 
 Choosing the number of epochs (`epoch_selection`): `validation` keeps the best epoch on the
-validation windows given to `fit` (the seed paper's force-level split); `folds` (trainer=reference)
+validation windows given to `fit` (the seed paper's force-level split; without any, `max_epochs` and the
+last one); `folds` (trainer=reference)
 trains once per stratified fold of the training recordings (data/splits/indices.py
 stratified_folds) with early stopping on the held-out fold, takes the median of the folds' best
 epochs, and refits on every training window for that many epochs: the epoch count rests on every
@@ -271,10 +272,6 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             return self._fit_ensemble(X, y, X_val, y_val, n_classes, epoch_callback, groups)
         if self.epoch_selection == "folds":
             return self._fit_on_folds(X, y, n_classes, epoch_callback, groups)
-        if X_val is None:
-            raise InputError("trainer.epoch_selection=validation needs validation recordings (none could be carved "
-                             "from these training recordings); use trainer.epoch_selection=folds or declare 'val' "
-                             "recordings")
         return self._train(X, y, X_val, y_val, n_classes, epoch_callback, int(self.max_epochs))
 
     def _member(self, **changes) -> "TimeSeriesClassifier":
