@@ -51,6 +51,7 @@ from omegaconf import OmegaConf
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from data.scenes.ert import injection_pairs  # noqa: E402
 from models.ert.image_readout import thresholded_centroid  # noqa: E402
 from runs.studies.ert_tests import RECONSTRUCTIONS, fit_reconstruction, chosen_hyperparameters  # noqa: E402
 
@@ -91,7 +92,6 @@ class PyEIT:
         fixed = np.vstack([electrodes, corners[~on_corner]])
         mesh = create(n_el=len(electrodes), fd=lambda p: shape.rectangle0(p, p1=[-1, -1], p2=[1, 1]),
                       h0=0.1, p_fix=fixed, bbox=[[-1, -1], [1, 1]])
-        from data.scenes.ert import injection_pairs
         ex_mat = injection_pairs(geometry["injection"], len(electrodes))
         proto = protocol.PyEITProtocol(ex_mat, *protocol.build_meas_pattern_std(ex_mat, len(electrodes), 1,
                                                                                    "meas_current"))
