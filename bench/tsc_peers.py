@@ -3,6 +3,7 @@
     .venv/bin/python bench/tsc_peers.py --quick            # 3 small sets, the ROCKET family and the default (< 10 min)
     .venv/bin/python bench/tsc_peers.py                    # every set and method (about 3 h on 2 cores)
     .venv/bin/python bench/tsc_peers.py --sets GunPoint --methods aeon:minirocket prcnn --seeds 0 1 2
+    .venv/bin/python bench/tsc_peers.py --report           # the table and figure from the results so far
 
 The peer runs in its own venv, bench/.venv-aeon (bench/requirements-aeon.txt: aeon 1.6.0 pins numpy
 and pandas below the project's versions through numba, so it never enters .venv), created here
@@ -190,10 +191,14 @@ def summary(rows: list[dict]) -> dict:
     cells = {}
     for r in rows:
         cell = cells.setdefault((r["set"], r["method"]), {"accuracy": [], "fit_s": [], "latency_ms": [],
-                                                         "latency_bulk_ms": [], "load": [], "errors": []})
+                                                         "latency_bulk_ms": [], "load": [], "errors": [], "notes": []})
         if "error" in r:
             cell["errors"].append(r["error"])
             continue
+        if r.get("chosen"):    # what the default chose
+            cell["notes"].append(r["chosen"] if isinstance(r["chosen"], str) else r["chosen"].get("chosen", "?"))
+        elif r.get("best_epoch") is not None:   # the epochs a net was refitted for
+            cell["notes"].append(f"{r['best_epoch']} epochs")
         for key in ("accuracy", "fit_s", "latency_ms", "latency_bulk_ms", "load"):
             if r.get(key) is not None:
                 cell[key].append(r[key])
@@ -204,24 +209,25 @@ def table(rows: list[dict]) -> str:
     cells = summary(rows)
     sets = [s for s in SETS if any(k[0] == s for k in cells)]
     methods = sorted({k[1] for k in cells}, key=lambda m: (not m.startswith("aeon:"), m))
-    lines = ["| set | method | test accuracy | fit s | latency ms / recording | load (1 min) |", "|---|---|---|---|---|---|"]
+    lines = ["| set | method | test accuracy | fit s | latency ms / recording | load (1 min) | chose / epochs |",
+             "|---|---|---|---|---|---|---|"]
     for s in sets:
         for m in methods:
             cell = cells.get((s, m))
             if cell is None:
                 continue
             if not cell["accuracy"]:
-                lines.append(f"| {s} | {m} | {cell['errors'][0] if cell['errors'] else '—'} | | | |")
+                lines.append(f"| {s} | {m} | {cell['errors'][0] if cell['errors'] else '—'} | | | | |")
                 continue
             latency = mean_sd(cell["latency_ms"], ".2f")
             if cell["latency_bulk_ms"]:
                 latency += f" ({np.mean(cell['latency_bulk_ms']):.2f} bulk)"
             note = f"; {len(cell['errors'])} failed: {cell['errors'][0]}" if cell["errors"] else ""
             lines.append(f"| {s} | {m} | {mean_sd(cell['accuracy'], '.3f')}{note} | {mean_sd(cell['fit_s'], '.2f')} | "
-                         f"{latency} | {min(cell['load']):.1f}–{max(cell['load']):.1f} |")
+                         f"{latency} | {min(cell['load']):.1f}–{max(cell['load']):.1f} | {', '.join(cell['notes'])} |")
         published = PUBLISHED.get(s, {})
         text = ", ".join(f"{k} {v:.3f}" for k, v in published.items() if v is not None)
-        lines.append(f"| {s} | published | {text or '—'} | | | |")
+        lines.append(f"| {s} | published | {text or '—'} | | | | |")
     return "\n".join(lines)
 
 
@@ -266,10 +272,13 @@ def main() -> None:
     parser.add_argument("--methods", nargs="+", help="aeon:minirocket, ..., a model name, or default")
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     parser.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "tsc_peers")
+    parser.add_argument("--report", action="store_true", help="run nothing: the table and figure from --out's results")
     parser.add_argument("--net-limit-min", type=float, default=NET_LIMIT_S / 60,
                         help="a net's seed 0 must finish within this; else its other seeds are skipped")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
+    if args.report:
+        return report(read_results(args.out / "results.jsonl"), args.out)
     sets = args.sets or (QUICK_SETS if args.quick else SETS)
     methods = args.methods or [*AEON_METHODS, *rocket_models(), DEFAULT, *([] if args.quick else NETS)]
     python = peer_python() if any(m.startswith("aeon:") for m in methods) or not (args.out / "sets").exists() else None
@@ -307,12 +316,15 @@ def main() -> None:
                         record({"set": name, "method": method, "seed": rest, "load": load_average(),
                                 "error": f"skipped: seed {seed} took more than {args.net_limit_min:.0f} min"})
                     break
-    rows = read_results(results_path)
+    report(read_results(results_path), args.out)
+
+
+def report(rows: list[dict], out: Path) -> None:
     text = table(rows)
-    (args.out / "table.md").write_text(text + "\n")
-    front = pareto_figure(rows, args.out / "pareto.png")
+    (out / "table.md").write_text(text + "\n")
+    front = pareto_figure(rows, out / "pareto.png")
     print(text)
-    print(f"Pareto front (mean accuracy vs mean fit s): {front}; figure {args.out / 'pareto.png'}")
+    print(f"Pareto front (mean accuracy vs mean fit s): {front}; figure {out / 'pareto.png'}")
 
 
 if __name__ == "__main__":
