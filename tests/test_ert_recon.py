@@ -140,12 +140,14 @@ def test_hyper_parameters_are_chosen_on_the_calibration_recording_only(compose_c
     monkeypatch.setattr(GaussNewtonReconstruction, "fit", spy)
     cfg = compose_config(["experiment=ert_localisation", *TINY])
     calibration = {"grid_points_per_side": 4, "n_force_levels": 3, "force_range_n": [2.0, 15.0]}
-    frame, _ = single_point_study(cfg, tmp_path, seeds=(0,), calibration=calibration, n_blank=5,
-                                  reconstruction={"kind": "gauss_newton", "pixels_per_side": 8,
-                                                  "lambdas_relative": [1e-3, 1e-2]})
+    frame, extra = single_point_study(cfg, tmp_path, seeds=(0,), calibration=calibration, n_blank=5,
+                                  reconstruction={"kind": "gauss_newton", "pixels_per_side": 99,   # Tikhonov's: unused
+                                                  "gauss_newton": {"pixels_per_side": 8,
+                                                                   "lambdas_relative": [1e-3, 1e-2]}})
     test = scene_for(cfg, seed=0, protocol="single_point", n_force_levels=1, force_range_n=[10.0, 10.0]).generate()
     cal = scene_for(cfg, seed=0, protocol="calibration", **calibration).generate()
     assert len(seen) == 1 and len(frame) == len(test.channels)
+    assert extra["loq"][0]["chosen"]["prior"] in ("tikhonov", "laplacian", "noser")
     assert np.array_equal(seen[0], cal.channels)                  # the calibration recording, whole
     # no test frame among the frames the choice saw
     assert not (np.abs(seen[0][:, None, :] - test.channels[None]).max(axis=-1) == 0).any()

@@ -91,13 +91,18 @@ def fit_reconstruction(kind: str, cfg, seed: int, X, y, params: dict):
 
 
 def calibrate(cfg, seed, calibration: dict, reconstruction: dict):
-    """(scene, fitted reconstruction) from one calibration recording of sensor `seed`;
-    `reconstruction` holds `kind` (default tikhonov) and the reconstruction's parameters."""
+    """(scene, fitted reconstruction) from one calibration recording of sensor `seed`.
+    `reconstruction`: `kind` (default tikhonov); its other plain keys are the Tikhonov
+    reconstruction's parameters, and a block named after another kind holds that kind's
+    (`{kind: greit, greit: {presses_per_sensor: 600}}`), so switching kind on the command line
+    leaves the Tikhonov settings where they are."""
     scene = scene_for(cfg, seed=seed, protocol="calibration", **calibration)
     table = scene.generate()
     params = dict(reconstruction)
     kind = params.pop("kind", "tikhonov")
-    return scene, fit_reconstruction(kind, cfg, seed, table.channels, table.targets, params)
+    blocks = {name: params.pop(name) for name in RECONSTRUCTIONS[1:] if name in params}
+    chosen = params if kind == "tikhonov" else dict(blocks.get(kind) or {})
+    return scene, fit_reconstruction(kind, cfg, seed, table.channels, table.targets, chosen)
 
 
 def chosen_hyperparameters(model) -> dict:
