@@ -18,6 +18,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from runs.fidelity.ert import LAYOUTS, layout_variant, single_point_protocol, two_point_protocol  # noqa: E402
 
 PHYSICAL = {"local_contact": {}, "textile_contact": {}, "viscoelastic_hysteresis": {}}
+# name: (effects added, effects removed, scene overrides[, reconstruction settings])
 VARIANTS = {
     "today": ({}, (), {}),
     "local_contact": ({"local_contact": {}}, (), {}),
@@ -32,6 +33,13 @@ VARIANTS = {
     "electrode_error_5mm": ({"electrode_position_error": {"sd_mm": 5.0}}, (), {}),
     "noise_x2": ({"adc_noise": {"noise_v": 4.0e-4, "bits": 24, "full_scale_v": 10.0}}, (), {}),
     "physical_all": ({**PHYSICAL, "electrode_contact_impedance": {}}, ("contact_resistance", "hysteresis"), {}),
+    "same_alpha_1e-3": ({}, (), {}, {"alpha_relative": [1.0e-3]}),
+    "same_alpha_1e-2": ({}, (), {}, {"alpha_relative": [1.0e-2]}),
+    "anisotropy_2_physical": ({**PHYSICAL, "electrode_contact_impedance": {}, "fabric_anisotropy": {"ratio": 2.0}},
+                              ("contact_resistance", "hysteresis"), {}),
+    "baseline_per_point": ({}, (), {"recording_presses": 6}),
+    "physical_per_point": ({**PHYSICAL, "electrode_contact_impedance": {}}, ("contact_resistance", "hysteresis"),
+                           {"recording_presses": 6}),
     "ideal": ({}, ("specimen_variation", "electrode_position_error", "foam_spread", "hysteresis", "baseline_drift"), {}),
 }
 
@@ -40,29 +48,41 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--variants", nargs="+", default=list(VARIANTS), choices=list(VARIANTS))
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
-    parser.add_argument("--two-point", action="store_true")
+    parser.add_argument("--two-point", action="store_true", help="also run the two-point test")
+    parser.add_argument("--two-point-only", action="store_true", help="run the two-point test alone")
+    parser.add_argument("--layouts", nargs="+", default=list(LAYOUTS), help="scene configs (default: both of the paper's)")
+    parser.add_argument("--kind", default=None, help="reconstruction kind (runs/studies/ert_tests.py RECONSTRUCTIONS; "
+                                                     "default: tikhonov)")
     parser.add_argument("--out", default=None)
     args = parser.parse_args()
     for name in args.variants:
-        add, remove, overrides = VARIANTS[name]
-        for layout in LAYOUTS:
+        add, remove, overrides, *reconstruction = VARIANTS[name]
+        for layout in args.layouts:
             cfg = layout_variant(layout, add, remove, **overrides)
             start, load = time.time(), os.getloadavg()[0]
-            result = {"variant": name, "layout": layout, "seeds": args.seeds,
-                      "single_point": single_point_protocol(cfg, tuple(args.seeds))}
-            if args.two_point:
+            result = {"variant": name, "layout": layout, "seeds": args.seeds, "kind": args.kind or "tikhonov"}
+            settings = {**(reconstruction[0] if reconstruction else {}), **({"kind": args.kind} if args.kind else {})}
+            if not args.two_point_only:
+                result["single_point"] = single_point_protocol(cfg, tuple(args.seeds), reconstruction=settings or None)
+            if args.two_point or args.two_point_only:
                 result["two_point"] = two_point_protocol(cfg, tuple(args.seeds))
             result.update(seconds=round(time.time() - start, 1), load_average=round(load, 2))
+            if args.out:
+                with open(args.out, "a") as handle:
+                    handle.write(json.dumps(result) + "\n")
+            if args.two_point_only:
+                tp = result["two_point"]
+                print(f"{name:28s} {layout:13s} two-point gradual share {tp['gradual_share']:.2f} "
+                      f"{tp['gradual_share_per_seed']}  distances {tp['discrimination_mm']}  "
+                      f"[{result['seconds']} s, load {result['load_average']}]", flush=True)
+                continue
             sp = result["single_point"]
-            print(f"{name:28s} {layout:13s} loc {sp['localisation_mm'][0]:6.2f} ± {sp['localisation_mm'][1]:5.2f} "
+            print(f"{name:28s} {layout:13s} {result['kind']:12s} loc {sp['localisation_mm'][0]:6.2f} ± {sp['localisation_mm'][1]:5.2f} "
                   f"(per-frame sd {sp['localisation_sd_mm'][0]:5.2f})  4N {sp['by_force_mm'][4.0][0]:6.2f}  "
                   f"10N {sp['by_force_mm'][10.0][0]:6.2f}  |F err| {sp['force_error_n'][0]:.2f} ± {sp['force_error_n'][1]:.2f}"
                   f"  r {sp['force_r'][0]:.3f}  LOQ {sp['loq_kpa'][0]:.1f} kPa"
                   + (f"  2pt gradual {result['two_point']['gradual_share']:.2f}" if args.two_point else "")
                   + f"  [{result['seconds']} s, load {result['load_average']}]", flush=True)
-            if args.out:
-                with open(args.out, "a") as handle:
-                    handle.write(json.dumps(result) + "\n")
 
 
 if __name__ == "__main__":

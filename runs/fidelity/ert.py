@@ -46,11 +46,12 @@ def layout_variant(layout: str, add: dict | None = None, remove=(), **overrides)
 
 
 def single_point_protocol(cfg, seeds=(0, 1, 2), ramp_forces_n=RAMP_FORCES_N, reference_forces_n=REFERENCE_FORCES_N,
-                          n_blank=100) -> dict:
+                          n_blank=100, reconstruction=None) -> dict:
     """Localisation of the frames above the limit of quantification along the ramp, and the force
-    error and r at the reference forces: per seed and as mean +- sd over seeds."""
+    error and r at the reference forces: per seed and as mean +- sd over seeds. `reconstruction`:
+    TikhonovReconstruction settings (None: its defaults, alpha chosen on validation per layout)."""
     with tempfile.TemporaryDirectory() as folder:
-        frame, extra = single_point_study(cfg, folder, seeds, None, None, tuple(ramp_forces_n), n_blank)
+        frame, extra = single_point_study(cfg, folder, seeds, None, reconstruction, tuple(ramp_forces_n), n_blank)
     loq = {row["seed"]: row["loq_n"] for row in extra["loq"]}
     per_seed = []
     for seed, part in frame.groupby("seed"):
