@@ -92,14 +92,14 @@ def _mean_corners(probe) -> float:
     return float(_sensitivity_per_mm(probe)[CORNERS].mean())
 
 
-def scene_section(scene: str, args, overrides) -> tuple[str, int, int, int]:
+def scene_section(scene: str, args) -> tuple[str, int, int, int]:
     """One scene's markdown section, and its rows held / measured / total."""
     start = time.perf_counter()
     if not load_scene(scene):
         return (f"## {scene}\n\nnot measured: {SCENE_MODULES[scene].replace('.', '/')}.py is not written yet\n",
                 0, 0, 0)
     config = args.config or CONFIGS[scene]
-    probe = make_probe(scene, overrides, args.repeats, config)
+    probe = make_probe(scene, args.overrides, args.repeats, config)
     rows = run_checks(scene, probe)
     held = sum(row.measured.holds is True for row in rows)
     measured = sum(row.measured.holds is not None for row in rows)
@@ -127,14 +127,15 @@ def main(argv=None):
     if args.patterns:
         print(compare_patterns(args.config or "rubber12", args.overrides, args.repeats))
         return
+    scenes = list(CHECKS) if args.scene == "all" else [args.scene]
     if args.json:
-        load_scene(args.scene)
-        rows = run_checks(args.scene, make_probe(args.scene, args.overrides, args.repeats, args.config))
+        rows = [row for scene in scenes if load_scene(scene)
+                for row in run_checks(scene, make_probe(scene, args.overrides, args.repeats, args.config))]
         print(json.dumps([asdict(row) for row in rows], indent=1, default=float))
         return
     sections, totals = [], np.zeros(3, dtype=int)
-    for scene in (CHECKS if args.scene == "all" else [args.scene]):
-        text, *counts = scene_section(scene, args, args.overrides)
+    for scene in scenes:
+        text, *counts = scene_section(scene, args)
         print(text, flush=True)
         sections.append(text)
         totals += counts

@@ -71,3 +71,20 @@ def test_kfold_blending_steadies_the_net():
     from runs.fidelity.kfold_variance import measure
     reduction = measure(seeds=5, folds=5)["reduction"]
     assert (reduction > 0.05).all(), reduction
+
+
+def test_every_scene_has_its_module_config_and_probe():
+    from runs.fidelity.observations import CONFIGS, PROBES, SCENE_MODULES, load_scene
+    assert set(CHECKS) == set(SCENE_MODULES) == set(CONFIGS) == {"rubber12", "fingertip", "capacitive6x6", "ert",
+                                                                  "taxels"}
+    for scene in CHECKS:
+        assert load_scene(scene) and CHECKS[scene] and scene in PROBES
+
+
+def test_a_scene_whose_module_is_not_written_is_reported_not_fatal(monkeypatch):
+    from runs.fidelity.observations import PROBES, SCENE_MODULES, SceneConfig, load_scene, make_probe
+    monkeypatch.setitem(SCENE_MODULES, "nowhere", "runs.fidelity.nowhere")
+    assert load_scene("nowhere") is False
+    monkeypatch.delitem(PROBES, "rubber12")        # a module that registers no probe gets the config
+    probe = make_probe("rubber12", repeats=3)
+    assert isinstance(probe, SceneConfig) and probe.repeats == 3 and "_target_" not in probe.params
