@@ -6,7 +6,7 @@
     .venv/bin/python bench/fidelity.py --scene rubber12 --config rubber12_lab --repeats 50
     .venv/bin/python bench/fidelity.py scene.measurement=opposite     # any Hydra override (one scene)
     .venv/bin/python bench/fidelity.py --patterns          # which rubber12 readout reproduces the sensitivity map
-    .venv/bin/python bench/fidelity.py --scene fingertip --repeats 15   # + Algorithm 1's diagnostic
+    .venv/bin/python bench/fidelity.py --scene fingertip              # + Algorithm 1's diagnostic
 
 The observations are the papers' (../shared/notes/seed-observations.md, docs/fidelity.md); one
 check per observation lives in runs/fidelity/<scene>.py, which says how each is measured and
@@ -115,7 +115,9 @@ def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--scene", default="rubber12", choices=[*CHECKS, "all"])
     parser.add_argument("--config", default=None, help="scene config to compose (default: the scene's own)")
-    parser.add_argument("--repeats", type=int, default=20, help="identical presses per point for noise figures")
+    parser.add_argument("--repeats", type=int, default=None,
+                        help="sample size of the noise figures (rubber12: identical presses per point, 20; fingertip: "
+                             "passes per level, 15; ert: two-point presses, 10); default: each scene's own")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--out", type=Path, help="also write the markdown to this file")
     parser.add_argument("--patterns", action="store_true", help="rubber12: compare readout patterns instead")
@@ -125,7 +127,7 @@ def main(argv=None):
         parser.error("--config and Hydra overrides apply to one scene; pick it with --scene")
 
     if args.patterns:
-        print(compare_patterns(args.config or "rubber12", args.overrides, args.repeats))
+        print(compare_patterns(args.config or "rubber12", args.overrides, args.repeats or 20))
         return
     scenes = list(CHECKS) if args.scene == "all" else [args.scene]
     if args.json:

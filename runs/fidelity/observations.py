@@ -80,8 +80,11 @@ def load_scene(scene: str) -> bool:
     return True
 
 
-def make_probe(scene: str, overrides=(), repeats: int = 20, config: str | None = None):
-    return PROBES.get(scene, SceneConfig)(scene_params(config or CONFIGS[scene], overrides), repeats=repeats)
+def make_probe(scene: str, overrides=(), repeats: int | None = None, config: str | None = None):
+    """The probe of `scene` on its config (or `config`) with Hydra `overrides`; `repeats` None:
+    the probe's own default sample size (each scene's paper's)."""
+    size = {} if repeats is None else {"repeats": repeats}
+    return PROBES.get(scene, SceneConfig)(scene_params(config or CONFIGS[scene], overrides), **size)
 
 
 def run_checks(scene: str, probe) -> list[Row]:
