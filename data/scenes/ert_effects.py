@@ -19,6 +19,7 @@ generator `rng` (data/scenes/contract.py).
 import numpy as np
 
 from common.errors import InputError
+from data.physics.textile_contact import CONTACT, FOAM, lag_factor, normalised_resistance
 
 
 def _fail(effect, message):
@@ -54,8 +55,9 @@ def electrode_position_error(state, rng, sd_mm=2.0):
 def fabric_anisotropy(state, rng, ratio=2.0):
     """The knitted base fabric conducts differently along its courses (x) and wales (y): the paper
     calls both fabrics orthotropic (seed 002 §6) but gives no ratio, so `ratio` (sheet conductance
-    along x / along y, geometric mean kept at the nominal value) is our choice. The
-    reconstruction, built from the nominal isotropic sheet, does not know it."""
+    along x / along y, geometric mean kept at the nominal value) is our choice; nothing is drawn
+    (`rng` is the sensor stage's signature). The reconstruction, built from the nominal
+    isotropic sheet, does not know it."""
     if not ratio > 0:
         _fail("fabric_anisotropy", f"ratio must be > 0, got {ratio}")
     state["anisotropy_ratio"] = float(ratio)
@@ -92,7 +94,6 @@ def viscoelastic_hysteresis(state, rng, relaxation_strength=None, relaxation_tim
     8.3 % over 1-12 Hz). Each press is caught on a haversine load cycle of a frequency drawn in
     `frequency_range_hz`, at a random point of its loading or unloading half; the transducer sees
     the force that the lagging compression corresponds to."""
-    from data.physics.textile_contact import FOAM, lag_factor
     strength = FOAM["relaxation_strength"] if relaxation_strength is None else relaxation_strength
     tau = FOAM["relaxation_time_s"] if relaxation_time_s is None else relaxation_time_s
     low, high = frequency_range_hz
@@ -139,7 +140,6 @@ def textile_contact(state, initial_slope_per_n=None, saturated_fraction=None, cr
     by a Weibull distribution of closure forces (Greenwood-Williamson counting), in parallel with
     the base fabric. Defaults (textile_contact.CONTACT): the paper's slope over the early 10 N and
     9.9 % saturation, the Weibull shape fitted there so the curve stays straight to 10 N."""
-    from data.physics.textile_contact import CONTACT, normalised_resistance
     params = {"initial_slope_per_n": initial_slope_per_n, "saturated_fraction": saturated_fraction,
               "crossing_shape": crossing_shape}
     params = {k: CONTACT[k] if v is None else v for k, v in params.items()}
