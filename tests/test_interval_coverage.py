@@ -70,7 +70,7 @@ def test_a_runs_pressure_bounds_are_non_negative_in_the_report_and_in_predict(co
     path = tmp_path / "rig.csv"
     frame.to_csv(path, index=False)
     cfg = compose_config(["data=table", f"data.path={path}", "data.target_columns=[depth_mm,pressure_pa]",
-                          "data.n_folds=2", "extras=quick", "trainer.max_epochs=3", "trainer.progress=false",
+                          "model=blend", "data.n_folds=2", "extras=quick", "trainer.max_epochs=3", "trainer.progress=false",
                           "model.candidates.random_forest.estimator.n_estimators=10",
                           "model.candidates.extra_trees.estimator.n_estimators=10"])
     metrics = run(cfg, tmp_path / "run")

@@ -71,7 +71,7 @@ def check_error(overrides) -> str:
     (["model=extra_trees", "model.n_estimators=1.5"], "model.n_estimators must be an integer >= 1, got 1.5"),
     (["model=extra_trees", "model.per_output=yes"], "model.per_output must be true or false or null, got 'yes'"),
     (["model=extra_trees", "model.max_features=[1]"], "model.max_features must be a number or a string or null, got [1]"),
-    (["model.candidates.resmlp.estimator.noise_std=abc"],
+    (["model=blend", "model.candidates.resmlp.estimator.noise_std=abc"],
      "model.candidates.resmlp.estimator.noise_std must be a number or null, got 'abc'"),
     (["scene.protocol=5"], "scene.protocol must be a string or null, got 5"),
     (["cost.budget_s=abc"], "cost.budget_s must be a number, got 'abc'"),
@@ -128,7 +128,7 @@ def test_each_job_of_a_sweep_is_checked_when_it_runs(compose_config, tmp_path):
 
 # -- trainer settings reach every net ---------------------------------------------------------
 def resmlp_candidate(overrides):
-    return composed(overrides).model.candidates.resmlp.estimator
+    return composed(["model=blend", *overrides]).model.candidates.resmlp.estimator
 
 
 def test_the_default_blend_keeps_its_training_length():
@@ -143,7 +143,7 @@ def test_the_default_blend_keeps_its_training_length():
 
 
 def test_trainer_settings_reach_the_blends_net():
-    blend = instantiate(composed(["trainer.max_epochs=7", "trainer.early_stopping_patience=2",
+    blend = instantiate(composed(["model=blend", "trainer.max_epochs=7", "trainer.early_stopping_patience=2",
                                   "trainer.batch_size=16"]).model)
     net = blend.candidates["resmlp"].estimator
     assert (net.max_epochs, net.early_stopping_patience, net.batch_size) == (7, 2, 16)
