@@ -180,6 +180,7 @@ def test_the_exported_graph_equals_the_eager_pipeline_and_survives_the_fitted_st
     saved = load_pipeline(save_pipeline(pipeline, tmp_path / "pipeline.npz"))
     eager = pipeline.predict_raw(raw)
     np.testing.assert_array_equal(saved.predict_raw(raw), eager)
+    np.testing.assert_array_equal(clone(saved.model).fit(X, y).predict_proba(X), model.predict_proba(X))  # refits alike
     proto = export_pipeline(pipeline, 17, "test")
     assert {n.op_type for n in proto.graph.node}.isdisjoint({"Conv", "ConvTranspose"})
     session = ort.InferenceSession(proto.SerializeToString(), providers=["CPUExecutionProvider"])
