@@ -257,7 +257,8 @@ def pareto_figure(rows: list[dict], path: Path) -> str:
     ax.set_xlabel("mean fit time (s, one thread, log scale)")
     ax.set_ylabel("mean test accuracy")
     ax.set_title(f"over {len(common)} sets: {', '.join(common)}", fontsize=8)
-    ax.legend(loc="lower right")
+    ax.margins(x=0.2, y=0.1)
+    ax.legend(loc="best")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
@@ -277,8 +278,9 @@ def main() -> None:
                         help="a net's seed 0 must finish within this; else its other seeds are skipped")
     args = parser.parse_args()
     args.out.mkdir(parents=True, exist_ok=True)
-    if args.report:
-        return report(read_results(args.out / "results.jsonl"), args.out)
+    if args.report:  # --sets: the Pareto figure over those sets only (the table keeps every set)
+        rows = read_results(args.out / "results.jsonl")
+        return report(rows, args.out, [r for r in rows if r["set"] in args.sets] if args.sets else rows)
     sets = args.sets or (QUICK_SETS if args.quick else SETS)
     methods = args.methods or [*AEON_METHODS, *rocket_models(), DEFAULT, *([] if args.quick else NETS)]
     python = peer_python() if any(m.startswith("aeon:") for m in methods) or not (args.out / "sets").exists() else None
@@ -319,10 +321,10 @@ def main() -> None:
     report(read_results(results_path), args.out)
 
 
-def report(rows: list[dict], out: Path) -> None:
+def report(rows: list[dict], out: Path, front_rows: list[dict] | None = None) -> None:
     text = table(rows)
     (out / "table.md").write_text(text + "\n")
-    front = pareto_figure(rows, out / "pareto.png")
+    front = pareto_figure(rows if front_rows is None else front_rows, out / "pareto.png")
     print(text)
     print(f"Pareto front (mean accuracy vs mean fit s): {front}; figure {out / 'pareto.png'}")
 
