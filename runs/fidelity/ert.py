@@ -27,10 +27,6 @@ from runs.fidelity.observations import ROOT, Measured, observation, probe, scene
 from runs.studies.ert_tests import run_two_point, single_point_study
 
 LAYOUTS = ("ert_internal", "ert_boundary")
-PAPER = {"localisation_mm": {"ert_internal": (8.13, 4.32), "ert_boundary": (23.72, 11.54)},
-         "force_error_n": {"ert_internal": (2.00, 1.18), "ert_boundary": (3.34, 1.88)},
-         "force_r": {"ert_internal": 0.983, "ert_boundary": 0.929},
-         "loq_kpa": {"ert_internal": (49.38, 20.25), "ert_boundary": (48.36, 48.75)}}
 RAMP_FORCES_N = (2.0, 4.0, 6.0, 8.0, 10.0, 12.0)
 REFERENCE_FORCES_N = (4.0, 8.0, 12.0)
 
@@ -49,7 +45,8 @@ def single_point_protocol(cfg, seeds=(0, 1, 2), ramp_forces_n=RAMP_FORCES_N, ref
                           n_blank=100, reconstruction=None) -> dict:
     """Localisation of the frames above the limit of quantification along the ramp, and the force
     error and r at the reference forces: per seed and as mean +- sd over seeds. `reconstruction`:
-    TikhonovReconstruction settings (None: its defaults, alpha chosen on validation per layout)."""
+    what runs/studies/ert_tests.py `calibrate` takes (`kind` and its settings; None: Tikhonov with
+    its defaults, alpha chosen on validation presses per layout)."""
     with tempfile.TemporaryDirectory() as folder:
         frame, extra = single_point_study(cfg, folder, seeds, None, reconstruction, tuple(ramp_forces_n), n_blank)
     loq = {row["seed"]: row["loq_n"] for row in extra["loq"]}
@@ -79,7 +76,7 @@ def single_point_protocol(cfg, seeds=(0, 1, 2), ramp_forces_n=RAMP_FORCES_N, ref
 def two_point_protocol(cfg, seeds=(0, 1, 2), n_repeats=10) -> dict:
     """The two-point test of runs/studies/ert_tests.py: p-values per seed, location and distance,
     the discrimination distances, and how gradual the p-values are: the share of them between
-    0.01 and 0.9 (the paper's table 2: 20 of 27 internal, 24 of 27 boundary)."""
+    0.01 and 0.9 (the paper's table 2: 18 of 27 internal, 26 of 27 boundary)."""
     with tempfile.TemporaryDirectory() as folder:
         metrics = run_two_point(cfg, folder, logging.getLogger(__name__), seeds, None, None, n_repeats)
         table = pd.read_csv(f"{folder}/two_point.csv")
@@ -157,7 +154,7 @@ def two_point(probe: ErtProbe) -> Measured:
                      for k in LAYOUTS)
     return Measured(f"mean discrimination distance (mm, '> 60' counted as 65) {text}; share of p-values in "
                     f"0.01-0.9: internal {gradual['ert_internal']:.2f}, boundary {gradual['ert_boundary']:.2f} "
-                    f"(paper 0.74, 0.89)", holds=bool(better and min(gradual.values()) >= 0.3),
+                    f"(paper 0.67, 0.96)", holds=bool(better and min(gradual.values()) >= 0.3),
                     tolerance="internal smaller at every location and >= 30 % of p-values gradual",
                     numbers={"distance_mm": first, "gradual_share": gradual})
 
