@@ -2,7 +2,7 @@
 `capacitive6x6` scene. One check per observation of ../shared/notes/seed-observations.md (seed 001
 section), registered in `CHECKS["capacitive6x6"]`; printed by
 
-    .venv/bin/python bench/fidelity.py --scene capacitive6x6          # ~3 min on one loaded core
+    .venv/bin/python bench/fidelity.py --scene capacitive6x6   # 9 min at load average 16 on 2 cores (GP, SVR)
 
 Every measurement runs over `seeds` (0-2: the scene's seed, the split's seed and the models'
 seed together) and reports mean ± sd.
