@@ -23,7 +23,8 @@ CONFIGURATIONS = [(f"experiment={folder.name}", f"+experiment/{folder.name}={pat
                   for path in sorted(folder.glob("*.yaml"))]
 # the trainer and extras each of these runs with: the model's recipe unless an experiment or the
 # command line says otherwise
-CHOSEN = {(): ("blend", "thorough"),
+CHOSEN = {(): ("blend", "spread"),
+          ("model=blend",): ("blend", "thorough"),
           ("model=resmlp",): ("default", "quick"),
           ("model=extra_trees",): ("default", "quick"),
           ("model=prcnn",): ("reference", "quick"),
