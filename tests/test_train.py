@@ -63,6 +63,9 @@ def test_a_run_writes_every_output(compose_config, tmp_path, model):
         figures |= {"importances", "correlation"}
     if model == "blend":
         figures |= {"importances", "correlation", "uncertainty", "identifiability"}
+    if model == "auto":   # the chosen candidate's figures: a blend's, a seed ensemble's intervals, or a net's
+        figures |= {"kfold_blend": {"importances", "correlation", "uncertainty", "identifiability"},
+                    "resmlp_seeds": {"uncertainty", "identifiability"}, "resmlp": set()}[metrics["choice"]["chosen"]]
     for name in ["metrics.json", "predictions.csv"] + [f"{f}.png" for f in figures]:
         assert (tmp_path / name).stat().st_size > 0, name
     assert atomic_leftovers(tmp_path) == []  # no temp file of an atomic write is left behind
