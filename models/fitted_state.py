@@ -81,6 +81,9 @@ ALLOWED_CLASSES = frozenset({
     "models.rocket.classifier.RocketClassifier",
     "models.rocket.minirocket.MiniRocket",
     "models.rocket.minirocket.DilationGroup",
+    "models.rocket.hydra.HydraMiniRocket",
+    "models.rocket.hydra.Hydra",
+    "models.rocket.hydra.HydraDilation",
     "models.nets.member_average.MemberAverage",
     # the torch.nn layers those networks are made of
     "torch.nn.modules.activation.ReLU",

@@ -25,24 +25,27 @@ from sklearn.linear_model import LogisticRegression
 
 from common.errors import InputError
 from common.standardise import mean_and_scale
+from models.rocket.hydra import HydraMiniRocket
 from models.rocket.minirocket import MIN_LENGTH, N_KERNELS, MiniRocket
 from models.rocket.ridge_loo import class_indicators, ridge_loo
 
 log = logging.getLogger(__name__)
 HEADS = ("auto", "ridge", "logistic")
+MEMBERS = ("minirocket", "hydra_minirocket")   # models/rocket/minirocket.py, models/rocket/hydra.py
 WORK_ELEMENTS = 8_000_000   # elements of a transform batch's largest tensor (32 MB): bounds the memory a batch takes
 MAX_TEMPERATURE = 10.0     # ridge scores are about +-1: at most a logit gap of ~20 where leave-one-out never errs (log loss -> 0 as t grows)
 
 
 class RocketClassifier(BaseEstimator, ClassifierMixin):
     def __init__(self, n_features=10_000, head="auto", ridge_max_samples=2_000, logistic_c=1.0,
-                 logistic_max_iter=1_000, seed=0):
+                 logistic_max_iter=1_000, seed=0, member="minirocket"):
         self.n_features = n_features
         self.head = head
         self.ridge_max_samples = ridge_max_samples
         self.logistic_c = logistic_c
         self.logistic_max_iter = logistic_max_iter
         self.seed = seed
+        self.member = member
 
     def _checked(self, X) -> np.ndarray:
         X = np.asarray(X, dtype=np.float64)
@@ -73,6 +76,8 @@ class RocketClassifier(BaseEstimator, ClassifierMixin):
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
         if self.head not in HEADS:
             raise InputError(f"model.head must be one of {', '.join(HEADS)}, got {self.head!r}")
+        if self.member not in MEMBERS:
+            raise InputError(f"model.member must be one of {', '.join(MEMBERS)}, got {self.member!r}")
         if self.n_features < N_KERNELS:
             raise InputError(f"model.n_features must be at least {N_KERNELS} (one per kernel), got {self.n_features}")
         X, y = self._checked(X), np.asarray(y, dtype=np.int64)
@@ -83,10 +88,13 @@ class RocketClassifier(BaseEstimator, ClassifierMixin):
         self.channel_mean_, self.channel_std_ = mean_and_scale(X, axis=(0, 2), keepdims=True)
         X = self._scaled(X)
         rng = np.random.default_rng(self.seed)
-        self.module_ = MiniRocket(X.shape[1], X.shape[2], self.n_features, n_classes)
+        self.module_ = (MiniRocket(X.shape[1], X.shape[2], self.n_features, n_classes) if self.member == "minirocket"
+                        else HydraMiniRocket(X.shape[1], X.shape[2], self.n_features, n_classes, self.seed))
         self.module_.fit_biases(X, rng, self._chunk(X.shape))
         features = self._features(X)
         feature_mean, feature_scale = mean_and_scale(features)
+        prescaled = getattr(self.module_, "prescaled_from", features.shape[1])   # Hydra's columns: sparse-scaled already
+        feature_mean[prescaled:], feature_scale[prescaled:] = 0.0, 1.0
         Z = (features - feature_mean) / feature_scale
         self.head_ = self.head if self.head != "auto" else ("ridge" if len(X) <= self.ridge_max_samples else "logistic")
         if self.head_ == "ridge":
