@@ -30,7 +30,9 @@ Touchstone: `tikhonov` (calibrated, models/tikhonov_reconstruction.py), `gauss_n
 (models/ert/gauss_newton.py: prior, lambda, threshold chosen), `greit` (models/ert/greit.py:
 trained on presses of 4 other simulated sensors at the run's noise), `greit_learned`
 (models/ert/learned_inverse.py: extra trees on GREIT's image, trained on the same other
-sensors' presses).
+sensors' presses), `learned_mlp` (models/ert/learned_readings_inverse.py: a linear map to the
+patch loads and an MLP on the 5 x 5 patches around the most loaded one, trained on 20 other
+simulated sensors x 500 presses at the run's noise; its noise weight chosen on calibration).
 
 Costs: set-up (pyEIT: mesh + Jacobian + H; Touchstone: the fit, which for GREIT includes
 simulating its training presses), per-frame reconstruction (batch 1, numpy, median of 200).

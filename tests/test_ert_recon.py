@@ -185,3 +185,60 @@ def test_learned_study_trains_on_another_sensor_instance(compose_config, tmp_pat
                           train_force_range_n=[4.0, 12.0], conformal_on="held_out")
     assert metrics["train_sensor_seeds"] == [1000] and metrics["seeds"] == [0]
     assert metrics["summary"]["extra_trees"]["localisation_mm"]["mean"] > 0
+
+
+MLP = {"n_training_sensors": 2, "presses_per_sensor": 150, "noise_weights": [1e-5, 1e-4], "width": 16, "epochs": 3,
+       "half_width_patches": 1}
+
+
+@pytest.fixture(scope="module")
+def learned_mlp_and_calibration():
+    from pathlib import Path
+
+    from hydra import compose, initialize_config_dir
+
+    from runs.studies.ert_tests import fit_reconstruction, scene_for
+
+    with initialize_config_dir(config_dir=str(Path(__file__).resolve().parents[1] / "configs"), version_base="1.3"):
+        cfg = compose(config_name="config", overrides=["experiment=ert_localisation", *TINY])
+    cal = scene_for(cfg, seed=3, protocol="calibration", grid_points_per_side=4).generate()
+    return cfg, cal, fit_reconstruction("learned_mlp", cfg, 3, cal.channels, cal.targets, MLP)
+
+
+def test_learned_mlp_keeps_the_contract_and_its_onnx_graph_equals_predict(learned_mlp_and_calibration):
+    from export.torch_graphs import to_onnx
+
+    _, cal, model = learned_mlp_and_calibration
+    assert model.fit.__self__ is model
+    assert {"module_", "noise_weight_", "validation_scores_", "n_features_in_"} <= {k for k in vars(model) if k.endswith("_")}
+    assert model.noise_weight_ in MLP["noise_weights"] and len(model.validation_scores_) == 2
+    eager = model.predict(cal.channels)
+    assert eager.shape == (len(cal.channels), 3) and np.isfinite(eager).all()
+    example = torch_tensor(cal.channels[:2])
+    proto = to_onnx(model.module_, example, "voltages", "prediction", opset=17)
+    session = ort.InferenceSession(proto.SerializeToString(), providers=["CPUExecutionProvider"])
+    onnx = predict_with_onnx(session, cal.channels)
+    assert np.allclose(onnx, eager, atol=1e-3, rtol=1e-4)
+    with pytest.raises(InputError, match="shape"):
+        model.predict(cal.channels[:, :5])
+    with pytest.raises(InputError, match="NaN"):
+        model.predict(np.full_like(cal.channels, np.nan))
+
+
+def torch_tensor(array):
+    import torch
+
+    return torch.from_numpy(np.array(array, dtype=np.float32))
+
+
+def test_learned_mlp_never_trains_on_the_sensor_under_test_and_is_deterministic(learned_mlp_and_calibration):
+    from runs.studies.ert_tests import fit_reconstruction
+
+    cfg, cal, model = learned_mlp_and_calibration
+    assert model.training_sensor_seeds() == [20_000, 20_001] and 3 not in model.training_sensor_seeds()
+    with pytest.raises(InputError, match="among the training sensors"):
+        fit_reconstruction("learned_mlp", cfg, 20_001, cal.channels, cal.targets, MLP)
+    again = fit_reconstruction("learned_mlp", cfg, 3, cal.channels, cal.targets, MLP)
+    assert np.array_equal(again.predict(cal.channels), model.predict(cal.channels))
+    other = fit_reconstruction("learned_mlp", cfg, 4, cal.channels, cal.targets, MLP)   # another seed: another net
+    assert not np.array_equal(other.predict(cal.channels), model.predict(cal.channels))

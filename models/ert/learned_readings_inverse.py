@@ -1,0 +1,206 @@
+"""A learned ERT inverse on the readings: a linear map to the load on each fabric patch, then a
+small MLP on the window of patches around the most loaded one.
+
+Why this shape: a press changes the conductance of whole 20 mm patches, so where inside a patch
+it sits is only in how the neoprene shares its load with the neighbouring patches. Step one is a
+GREIT-like linear map (Adler et al. 2009, eq. 8 and 10) from the 276 reduced readings
+u = K^T v (readings.py) to the 10 x 10 patch loads, trained on simulated presses whose desired
+image is the true patch loads (data/scenes/ert.py `patch_loads_n`, the scene's own footprint and
+foam spread), with a noise term lambda K^T K. Step two reads the press from the
+(2h + 1)^2 patches around the arg-max patch (relative loads and the log of the largest): an MLP
+predicts the offset from that patch's centre and the force. The window moves with the press, so
+every training press teaches the same local map (translation-equivariant, which is what lets a
+few thousand presses suffice; an MLP on all 276 readings needed far more and did worse).
+
+Training presses come from `n_training_sensors` simulated sensors (seeds `training_seed` + k,
+never the sensor under test: runs/studies/ert_tests.py refuses a collision) through
+GreitReconstruction.training_frames, the one simulator of other sensors' presses. `fit(X, y)`
+receives validation presses of the sensor under test (a calibration recording): only the noise
+weight lambda is chosen there; the networks never see them.
+
+The whole map is one torch module (`module_`): the voltages -> patch loads matrix (K times the
+patch map, folded), the window gather and the MLP, so `predict` and its ONNX graph
+(export/torch_graphs.py `to_onnx`) are the same computation.
+"""
+import numpy as np
+import torch
+from sklearn.base import BaseEstimator, RegressorMixin
+from sklearn.utils.validation import check_is_fitted
+from torch import nn
+
+from common.errors import InputError
+from data.scenes.ert import patch_loads_n
+from models.ert.greit import GreitReconstruction
+from models.ert.readings import transfer_basis
+
+OFFSET_SCALE_MM = 10.0        # half a patch: the MLP's offsets are of order one
+FORCE_CENTRE_N, FORCE_SCALE_N = 8.0, 4.0
+
+
+class PatchWindowNet(nn.Module):
+    """voltages (n, n_channels) float32 -> (n, 3) x_mm, y_mm, force_n."""
+
+    def __init__(self, load_map, n_side, patch_mm, half_width, width, n_layers=2):
+        super().__init__()
+        self.n_side, self.half_width, self.patch_mm = int(n_side), int(half_width), float(patch_mm)
+        self.register_buffer("load_map", torch.as_tensor(load_map, dtype=torch.float32))    # (n_channels, n_patches)
+        span = 2 * self.half_width + 1
+        offsets = torch.arange(span)
+        padded_side = self.n_side + 2 * self.half_width
+        self.register_buffer("window_index", (offsets[:, None] * padded_side + offsets[None, :]).reshape(-1))
+        n_features = span * span + 1
+        self.register_buffer("feature_mean", torch.zeros(n_features))
+        self.register_buffer("feature_scale", torch.ones(n_features))
+        layers, size = [], n_features
+        for _ in range(n_layers):
+            layers += [nn.Linear(size, width), nn.GELU()]
+            size = width
+        self.mlp = nn.Sequential(*layers, nn.Linear(size, 3))
+
+    def features(self, voltages):
+        """(patch-centre xy of the arg-max patch (n, 2), window features (n, (2h + 1)^2 + 1))."""
+        loads = voltages @ self.load_map
+        n, h = self.n_side, self.half_width
+        peak = loads.argmax(dim=1)
+        iy, ix = torch.div(peak, n, rounding_mode="floor"), torch.remainder(peak, n)
+        padded = nn.functional.pad(loads.reshape(-1, n, n), (h, h, h, h)).reshape(loads.shape[0], -1)
+        window = torch.gather(padded, 1, (iy * (n + 2 * h) + ix)[:, None] + self.window_index[None, :])
+        top = window.max(dim=1, keepdim=True).values.clamp_min(1e-6)
+        centre = torch.stack([ix, iy], dim=1).to(loads.dtype) * self.patch_mm + 0.5 * self.patch_mm
+        return centre, torch.cat([window / top, torch.log(top)], dim=1)
+
+    def forward(self, voltages):
+        centre, features = self.features(voltages)
+        out = self.mlp((features - self.feature_mean) / self.feature_scale)
+        return torch.cat([centre + OFFSET_SCALE_MM * out[:, :2], FORCE_CENTRE_N + FORCE_SCALE_N * out[:, 2:]], dim=1)
+
+
+class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
+    """ERT voltages (changes from the unloaded frame) -> (x_mm, y_mm, force_n)."""
+
+    def __init__(self, geometry=None, training_scene=None, patch_mm=20.0, foam_spread_sd_mm=None,
+                 n_training_sensors=20, presses_per_sensor=500, training_force_range_n=(1.0, 15.0),
+                 training_seed=20_000, noise_weights=(1e-6, 1e-5, 1e-4), half_width_patches=2, width=128,
+                 epochs=30, batch_size=256, learning_rate=3e-3, quantification_limit_n=2.0, seed=0):
+        self.geometry = geometry
+        self.training_scene = training_scene
+        self.patch_mm = patch_mm
+        self.foam_spread_sd_mm = foam_spread_sd_mm
+        self.n_training_sensors = n_training_sensors
+        self.presses_per_sensor = presses_per_sensor
+        self.training_force_range_n = training_force_range_n
+        self.training_seed = training_seed
+        self.noise_weights = noise_weights
+        self.half_width_patches = half_width_patches
+        self.width = width
+        self.epochs = epochs
+        self.batch_size = batch_size
+        self.learning_rate = learning_rate
+        self.quantification_limit_n = quantification_limit_n
+        self.seed = seed
+
+    def _simulator(self) -> GreitReconstruction:
+        side = self.geometry["side_mm"]
+        return GreitReconstruction(geometry=self.geometry, training_scene=self.training_scene,
+                                   n_training_sensors=self.n_training_sensors,
+                                   presses_per_sensor=self.presses_per_sensor,
+                                   training_force_range_n=tuple(self.training_force_range_n),
+                                   training_position_range_mm=(0.0, side), training_seed=self.training_seed)
+
+    def training_sensor_seeds(self) -> list[int]:
+        return self._simulator().training_sensor_seeds()
+
+    def _spread_sd_mm(self) -> float:
+        """The foam spread the training scene simulates (its `foam_spread` effect), unless given."""
+        if self.foam_spread_sd_mm is not None:
+            return float(self.foam_spread_sd_mm)
+        effect = (self.training_scene.get("effects") or {}).get("foam_spread")
+        if effect is None:
+            return 0.0
+        return float((effect or {}).get("spread_per_thickness", 1.0)) * float(self.training_scene.get("foam_thickness_mm", 4.0))
+
+    def _check(self, X, n_channels):
+        X = np.asarray(X, dtype=float)
+        if X.ndim != 2 or X.shape[1] != n_channels:
+            raise InputError(f"voltages must have shape (n_frames, {n_channels}), got {X.shape}")
+        if not np.isfinite(X).all():
+            raise InputError("voltages contain NaN or infinite values")
+        return X
+
+    def fit(self, X, y):
+        """X, y: validation presses of the sensor under test (the noise weight is chosen there)."""
+        if self.geometry is None:
+            raise InputError("model.geometry is required: the scene's nominal geometry (ERTScene.geometry())")
+        if int(self.half_width_patches) < 0 or int(self.width) < 1 or int(self.epochs) < 1:
+            raise InputError(f"model.half_width_patches must be >= 0, width and epochs >= 1; got "
+                             f"{self.half_width_patches}, {self.width}, {self.epochs}")
+        weights = np.atleast_1d(np.asarray(self.noise_weights, dtype=float))
+        if weights.size == 0 or not (weights > 0).all():
+            raise InputError(f"model.noise_weights must be positive, got {weights.tolist()}")
+        basis = transfer_basis(self.geometry)
+        X = self._check(X, basis.shape[0])
+        y = np.asarray(y, dtype=float)
+        if y.ndim != 2 or y.shape[1] < 3 or len(y) != len(X):
+            raise InputError(f"validation targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
+        usable = y[:, 2] >= self.quantification_limit_n
+        if usable.sum() < 4:
+            raise InputError(f"the validation set has {int(usable.sum())} presses at or above the quantification "
+                             f"limit ({self.quantification_limit_n} N); at least 4 are needed")
+        side = float(self.geometry["side_mm"])
+        n_side = int(round(side / float(self.patch_mm)))
+        voltages, targets = self._simulator().training_frames()
+        loads = patch_loads_n(targets[:, None, :3], side, float(self.patch_mm),
+                              self.geometry["indenter_diameter_mm"] / 2.0, self._spread_sd_mm())
+        u = np.asarray(basis.T @ voltages.T).T
+        noise = np.asarray((basis.T @ basis).todense())
+        signal = u.T @ u
+        scale = np.trace(signal) / np.trace(noise)
+        best, scores = None, []
+        for weight in weights:
+            patch_map = np.linalg.solve(signal + weight * scale * noise, u.T @ loads)        # (n_z, n_patches)
+            module = self._train(np.asarray(basis @ patch_map), voltages, targets, n_side)
+            with torch.no_grad():
+                xy = module(torch.as_tensor(X[usable], dtype=torch.float32)).numpy()[:, :2]
+            error = float(np.hypot(*(xy - y[usable, :2]).T).mean())
+            scores.append({"noise_weight": float(weight), "localisation_mm": error})
+            if best is None or error < best[0]:
+                best = (error, float(weight), module)
+        _, self.noise_weight_, self.module_ = best
+        self.validation_scores_ = scores
+        self.n_features_in_ = basis.shape[0]
+        return self
+
+    def _train(self, load_map, voltages, targets, n_side) -> PatchWindowNet:
+        generator = torch.Generator().manual_seed(int(self.seed))
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(self.seed))
+            module = PatchWindowNet(load_map, n_side, self.patch_mm, int(self.half_width_patches), int(self.width))
+        inputs = torch.as_tensor(voltages, dtype=torch.float32)
+        with torch.no_grad():
+            centre, features = module.features(inputs)
+            module.feature_mean.copy_(features.mean(dim=0))
+            module.feature_scale.copy_(features.std(dim=0) + 1e-6)
+        goal = torch.as_tensor(targets[:, :3], dtype=torch.float32)
+        batch = int(self.batch_size)
+        steps_per_epoch = max(1, len(inputs) // batch)
+        optimiser = torch.optim.AdamW(module.mlp.parameters(), lr=float(self.learning_rate) / 3, weight_decay=1e-4)
+        schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, float(self.learning_rate),
+                                                       total_steps=int(self.epochs) * steps_per_epoch)
+        scale = torch.tensor([OFFSET_SCALE_MM, OFFSET_SCALE_MM, FORCE_SCALE_N])
+        module.train()
+        for _ in range(int(self.epochs)):
+            order = torch.randperm(len(inputs), generator=generator)
+            for step in range(steps_per_epoch):
+                rows = order[step * batch:(step + 1) * batch]
+                loss = nn.functional.smooth_l1_loss(module(inputs[rows]) / scale, goal[rows] / scale, beta=0.1)
+                optimiser.zero_grad()
+                loss.backward()
+                optimiser.step()
+                schedule.step()
+        return module.eval()
+
+    def predict(self, X) -> np.ndarray:
+        check_is_fitted(self, "module_")
+        X = self._check(X, self.n_features_in_)
+        with torch.no_grad():
+            return self.module_(torch.from_numpy(np.array(X, dtype=np.float32))).numpy().astype(float)
