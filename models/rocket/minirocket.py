@@ -33,7 +33,11 @@ KERNEL_LENGTH = 9
 KERNEL_POSITIONS = torch.tensor(list(itertools.combinations(range(KERNEL_LENGTH), 3)), dtype=torch.long)  # 84 x 3
 N_KERNELS = len(KERNEL_POSITIONS)
 PAIR_POSITIONS = torch.tensor(list(itertools.combinations(range(KERNEL_LENGTH), 2)), dtype=torch.long)  # 36 x 2
-KERNEL_PAIR = torch.tensor([PAIR_POSITIONS.tolist().index([a, b]) for a, b, _ in KERNEL_POSITIONS.tolist()])
+KERNEL_PAIR = torch.tensor([PAIR_POSITIONS.tolist().index([b, c]) for _, b, c in KERNEL_POSITIONS.tolist()])
+PAIR_START = [sum(KERNEL_LENGTH - 1 - b for b in range(first)) for first in range(KERNEL_LENGTH)]  # first pair (b, c) with b >= first
+# per window, at most: a dilation group's outputs (x channels), and the comparisons of one PPV step; more spills the cache
+CONVOLUTION_ELEMENTS = 1 << 18
+COMPARISON_ELEMENTS = 1 << 19
 MIN_LENGTH = KERNEL_LENGTH
 GOLDEN_RATIO = (math.sqrt(5) + 1) / 2
 
@@ -74,8 +78,9 @@ class DilationGroup(nn.Module):
     windows [batch, channels, length] -> their PPV features [batch, dilations x 84 x count].
 
     One Gather makes the nine shifted copies at every dilation of the group [batch, channels,
-    dilations, 9, length], three Gathers and Adds the 84 kernels' outputs, one Greater / Cast /
-    ReduceSum the PPVs. Kernels pooled over the inner part get -inf outside it (`pool_offset`:
+    dilations, 9, length], four Gathers and Adds the 84 kernels' outputs, one Greater / Cast /
+    ReduceSum per few dilations the PPVs (a group is as many dilations as keep these tensors in
+    cache: at 1,460 steps one dilation's comparisons are 84 x 4 x 1,460 floats, 2 MB). Kernels pooled over the inner part get -inf outside it (`pool_offset`:
     never above a bias) and their count divided by the inner length (`pool_scale`)."""
 
     def __init__(self, n_channels: int, length: int, dilations: list[int], first_index: int, count: int):
@@ -86,8 +91,8 @@ class DilationGroup(nn.Module):
         self.padding = 4 * max(dilations)
         self.register_buffer("shift_index", self.padding + shifts + torch.arange(length)[None, None, :])
         self.register_buffer("pair_positions", PAIR_POSITIONS.clone())                 # 36 x 2
-        self.register_buffer("kernel_pair", KERNEL_PAIR.clone())                       # each kernel's (a, b) pair
-        self.register_buffer("kernel_last", KERNEL_POSITIONS[:, 2].clone())            # and its c
+        self.register_buffer("kernel_first", KERNEL_POSITIONS[:, 0].clone())          # each kernel's a
+        self.register_buffer("kernel_pair", KERNEL_PAIR.clone())                       # and its (b, c) pair
         self.register_buffer("channel_mask", torch.ones(n_channels, len(dilations), N_KERNELS, 1))
         self.register_buffer("biases", torch.zeros(len(dilations), N_KERNELS, count, 1))
         # the paper alternates, from the first dilation on, kernels pooled over the whole output and over the inner part
@@ -101,7 +106,7 @@ class DilationGroup(nn.Module):
     def convolutions(self, x: torch.Tensor) -> torch.Tensor:
         """The 84 kernels' outputs at each of the group's dilations on each kernel's channel
         combination, zero-padded: [batch, dilations, 84, length]. Kernel (a, b, c) is
-        (3 x_a + 3 x_b) + (3 x_c - sum_j x_j): the 36 pair sums and the nine `3 x_c - total` are
+        3 x_a + (3 x_b + (3 x_c - sum_j x_j)): the nine `3 x_c - total` and the 36 pair sums are
         shared, so each of the 84 outputs costs one addition."""
         padded = nn.functional.pad(x, (self.padding, self.padding))
         copies = padded[:, :, self.shift_index]                      # [batch, channels, D, 9, length]
@@ -110,9 +115,17 @@ class DilationGroup(nn.Module):
             total = total + copies[:, :, :, j]
         shifted = 3 * copies                                         # gamma = 3X
         last = shifted - total.unsqueeze(3)                          # 3 x_c - sum_j x_j (alpha = -X)
-        pairs = shifted.index_select(3, self.pair_positions[:, 0]) + shifted.index_select(3, self.pair_positions[:, 1])
-        per_channel = (pairs.index_select(3, self.kernel_pair)
-                       + last.index_select(3, self.kernel_last))     # [batch, channels, D, 84, length]
+        if torch.jit.is_tracing():  # onnxruntime: four Gathers ran faster than 15 Slices, Adds and Concats
+            pairs = (shifted.index_select(3, self.pair_positions[:, 0])
+                     + last.index_select(3, self.pair_positions[:, 1]))
+            per_channel = (shifted.index_select(3, self.kernel_first)
+                           + pairs.index_select(3, self.kernel_pair))  # [batch, channels, D, 84, length]
+        else:  # torch: the same additions on slices (index_select took a quarter of the eager transform). Pairs
+            # (b, c) in lexicographic order are, for each b, 3 x_b + last[b + 1:]; kernels (a, b, c) in
+            # itertools.combinations order are, for each a, 3 x_a + the pairs with b > a (a tail of the pairs)
+            pairs = torch.cat([shifted[:, :, :, b:b + 1] + last[:, :, :, b + 1:] for b in range(KERNEL_LENGTH - 1)], 3)
+            per_channel = torch.cat([shifted[:, :, :, a:a + 1] + pairs[:, :, :, PAIR_START[a + 1]:]
+                                     for a in range(KERNEL_LENGTH - 2)], 3)
         if self.n_channels == 1:
             return per_channel[:, 0]
         combined = per_channel[:, 0] * self.channel_mask[0]
@@ -121,14 +134,18 @@ class DilationGroup(nn.Module):
         return combined
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        pooled = (self.convolutions(x) + self.pool_offset).unsqueeze(3)          # [batch, D, 84, 1, length]
-        if torch.jit.is_tracing():   # export/torch_graphs.to_onnx traces
-            positive = (pooled > self.biases).float()                            # Greater, Cast
-        else:  # the same 0/1 written straight as float: torch's bool-to-float cast took 2/3 of the transform
-            shape = (pooled.shape[0], *self.biases.shape[:3], pooled.shape[-1])     # [batch, D, 84, count, length]
-            positive = torch.gt(pooled, self.biases, out=torch.empty(shape))
-        counts = positive.sum(-1)                                                # [batch, D, 84, count]
-        return (counts * self.pool_scale).flatten(1)
+        outputs = self.convolutions(x) + self.pool_offset                         # [batch, D, 84, length]
+        features = []
+        step = max(1, COMPARISON_ELEMENTS // (N_KERNELS * self.count * outputs.shape[-1]))
+        for j in range(0, outputs.shape[1], step):   # a few dilations at a time, so that the comparisons stay in cache
+            pooled, biases = outputs[:, j:j + step].unsqueeze(3), self.biases[j:j + step]
+            if torch.jit.is_tracing():   # export/torch_graphs.to_onnx traces: Greater, Cast, ReduceSum
+                counts = (pooled > biases).float().sum(-1)
+            else:  # the same 0/1 written straight as float: torch's bool-to-float cast took 2/3 of the transform
+                shape = (*pooled.shape[:3], biases.shape[2], pooled.shape[-1])    # [batch, step, 84, count, length]
+                counts = torch.gt(pooled, biases, out=torch.empty(shape)).sum(-1)
+            features.append(counts * self.pool_scale[j:j + step])                # [batch, step, 84, count]
+        return torch.cat(features, 1).flatten(1)
 
 
 class MiniRocket(nn.Module):
@@ -145,7 +162,8 @@ class MiniRocket(nn.Module):
             members = [i for i, c in enumerate(self.features_per_kernel) if c == count]
             # consecutive runs only, so that a group's dilation indices are first_index, first_index + 1, ...
             runs = np.split(members, np.nonzero(np.diff(members) > 1)[0] + 1)
-            groups += [(int(run[0]), len(run), count) for run in runs]
+            most = max(1, CONVOLUTION_ELEMENTS // (N_KERNELS * self.n_channels * self.length))  # dilations per group
+            groups += [(int(run[s]), len(run[s:s + most]), count) for run in runs for s in range(0, len(run), most)]
         self.groups = nn.ModuleList([DilationGroup(self.n_channels, self.length, self.dilations[i:i + n], i, count)
                                      for i, n, count in sorted(groups)])
         self.head = nn.Linear(self.n_features, n_classes)
