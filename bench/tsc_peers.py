@@ -39,6 +39,7 @@ import json
 import os
 import subprocess
 import sys
+import textwrap
 import time
 from pathlib import Path
 
@@ -256,7 +257,7 @@ def pareto_figure(rows: list[dict], path: Path) -> str:
     ax.set_xscale("log")
     ax.set_xlabel("mean fit time (s, one thread, log scale)")
     ax.set_ylabel("mean test accuracy")
-    ax.set_title(f"over {len(common)} sets: {', '.join(common)}", fontsize=8)
+    ax.set_title(textwrap.fill(f"over {len(common)} sets: {', '.join(common)}", 90), fontsize=8)
     ax.margins(x=0.2, y=0.1)
     ax.legend(loc="best")
     fig.tight_layout()
