@@ -70,7 +70,10 @@ class PatchWindowNet(nn.Module):
         return centre, torch.cat([window / top, torch.log(top)], dim=1)
 
     def forward(self, voltages):
-        centre, features = self.features(voltages)
+        return self.head(*self.features(voltages))
+
+    def head(self, centre, features):
+        """The MLP on `features`' output: training runs it on features computed once."""
         out = self.mlp((features - self.feature_mean) / self.feature_scale)
         return torch.cat([centre + OFFSET_SCALE_MM * out[:, :2], FORCE_CENTRE_N + FORCE_SCALE_N * out[:, 2:]], dim=1)
 
@@ -176,23 +179,24 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
             torch.manual_seed(int(self.seed))
             module = PatchWindowNet(load_map, n_side, self.patch_mm, int(self.half_width_patches), int(self.width))
         inputs = torch.as_tensor(voltages, dtype=torch.float32)
-        with torch.no_grad():
+        with torch.no_grad():     # the patch map is fixed: its features once, not per step
             centre, features = module.features(inputs)
             module.feature_mean.copy_(features.mean(dim=0))
             module.feature_scale.copy_(features.std(dim=0) + 1e-6)
         goal = torch.as_tensor(targets[:, :3], dtype=torch.float32)
         batch = int(self.batch_size)
-        steps_per_epoch = max(1, len(inputs) // batch)
+        steps_per_epoch = max(1, len(features) // batch)
         optimiser = torch.optim.AdamW(module.mlp.parameters(), lr=float(self.learning_rate) / 3, weight_decay=1e-4)
         schedule = torch.optim.lr_scheduler.OneCycleLR(optimiser, float(self.learning_rate),
                                                        total_steps=int(self.epochs) * steps_per_epoch)
         scale = torch.tensor([OFFSET_SCALE_MM, OFFSET_SCALE_MM, FORCE_SCALE_N])
         module.train()
         for _ in range(int(self.epochs)):
-            order = torch.randperm(len(inputs), generator=generator)
+            order = torch.randperm(len(features), generator=generator)
             for step in range(steps_per_epoch):
                 rows = order[step * batch:(step + 1) * batch]
-                loss = nn.functional.smooth_l1_loss(module(inputs[rows]) / scale, goal[rows] / scale, beta=0.1)
+                loss = nn.functional.smooth_l1_loss(module.head(centre[rows], features[rows]) / scale, goal[rows] / scale,
+                                                    beta=0.1)
                 optimiser.zero_grad()
                 loss.backward()
                 optimiser.step()
