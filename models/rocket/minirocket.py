@@ -134,12 +134,24 @@ class DilationGroup(nn.Module):
         return combined
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
+        length = x.shape[-1]
+        comparisons = N_KERNELS * self.count * length                  # per window and dilation
+        if torch.jit.is_tracing():  # export/torch_graphs.to_onnx traces: one batch of any size
+            return self._features(x, max(1, COMPARISON_ELEMENTS // comparisons))
+        # eager (fit and predict run batches of many windows): a few windows at a time as well
+        windows = max(1, min(CONVOLUTION_ELEMENTS // (len(self.dilations) * N_KERNELS * self.n_channels * length),
+                             COMPARISON_ELEMENTS // comparisons))
+        step = max(1, COMPARISON_ELEMENTS // (windows * comparisons))
+        return torch.cat([self._features(part, step) for part in x.split(windows)])
+
+    def _features(self, x: torch.Tensor, step: int) -> torch.Tensor:
+        """PPV features [batch, D x 84 x count], `step` dilations at a time so that their
+        comparisons stay in cache."""
         outputs = self.convolutions(x) + self.pool_offset                         # [batch, D, 84, length]
         features = []
-        step = max(1, COMPARISON_ELEMENTS // (N_KERNELS * self.count * outputs.shape[-1]))
-        for j in range(0, outputs.shape[1], step):   # a few dilations at a time, so that the comparisons stay in cache
+        for j in range(0, outputs.shape[1], step):
             pooled, biases = outputs[:, j:j + step].unsqueeze(3), self.biases[j:j + step]
-            if torch.jit.is_tracing():   # export/torch_graphs.to_onnx traces: Greater, Cast, ReduceSum
+            if torch.jit.is_tracing():   # Greater, Cast, ReduceSum
                 counts = (pooled > biases).float().sum(-1)
             else:  # the same 0/1 written straight as float: torch's bool-to-float cast took 2/3 of the transform
                 shape = (*pooled.shape[:3], biases.shape[2], pooled.shape[-1])    # [batch, step, 84, count, length]
