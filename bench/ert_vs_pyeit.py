@@ -28,7 +28,9 @@ frames enter pyEIT negated (same channel order).
 
 Touchstone: `tikhonov` (calibrated, models/tikhonov_reconstruction.py), `gauss_newton`
 (models/ert/gauss_newton.py: prior, lambda, threshold chosen), `greit` (models/ert/greit.py:
-trained on presses of 4 other simulated sensors at the run's noise), `learned_mlp` (models/ert/learned_readings_inverse.py: a linear map to the
+trained on presses of 4 other simulated sensors at the run's noise), `greit_learned`
+(models/ert/learned_inverse.py: extra trees on GREIT's image, trained on the same other
+sensors' presses), `learned_mlp` (models/ert/learned_readings_inverse.py: a linear map to the
 patch loads and an MLP on the 5 x 5 patches around the most loaded one, trained on 20 other
 simulated sensors x 500 presses at the run's noise; its noise weight chosen on calibration).
 
@@ -207,7 +209,7 @@ def main(argv=None):
                 for kind in RECONSTRUCTIONS:
                     if kind in args.methods:
                         methods[kind] = Touchstone(kind, cfg, seed, {"presses_per_sensor": args.greit_presses}
-                                                   if kind == "greit" else {})
+                                                   if kind.startswith("greit") else {})
                 for name, method in methods.items():
                     method.fit(cal.channels, cal.targets)
                     error = np.hypot(*(method.predict(test.channels) - test.targets[:, :2]).T)

@@ -153,13 +153,23 @@ def test_hyper_parameters_are_chosen_on_the_calibration_recording_only(compose_c
     assert not (np.abs(seen[0][:, None, :] - test.channels[None]).max(axis=-1) == 0).any()
 
 
-def test_greit_through_the_study_refuses_a_training_sensor_that_is_the_sensor_under_test(compose_config):
+def test_learned_inverse_trains_on_other_sensors_and_is_scored_on_the_sensor_under_test(compose_config):
+    from models.ert.learned_inverse import GreitLearnedInverse
     from runs.studies.ert_tests import fit_reconstruction, scene_for
 
     cfg = compose_config(["experiment=ert_localisation", *TINY])
     cal = scene_for(cfg, seed=3, protocol="calibration", grid_points_per_side=4).generate()
+    params = {"pixels_per_side": 12, "desired_radius_mm": [15.0], "noise_weights": [1e-2], "n_training_sensors": 2,
+              "presses_per_sensor": 120, "n_estimators": 20}
+    model = fit_reconstruction("greit_learned", cfg, 3, cal.channels, cal.targets, params)
+    assert isinstance(model, GreitLearnedInverse)
+    assert 3 not in model.greit_.training_sensor_seeds()
+    voltages, _ = model.greit_.training_frames()
+    assert len(voltages) == 240 and not np.isin(cal.channels[:5], voltages).all()
+    prediction = model.predict(cal.channels)
+    assert prediction.shape == (len(cal.channels), 3) and np.isfinite(prediction).all()
     with pytest.raises(InputError, match="among the training sensors"):
-        fit_reconstruction("greit", cfg, 10_001, cal.channels, cal.targets, {"training_seed": 10_000})
+        fit_reconstruction("greit", cfg, 10_001, cal.channels, cal.targets, params | {"training_seed": 10_000})
 
 
 def test_learned_study_trains_on_another_sensor_instance(compose_config, tmp_path):

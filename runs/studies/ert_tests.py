@@ -33,6 +33,7 @@ from common.atomic import atomic_write_text
 from common.errors import InputError
 from models.ert.gauss_newton import GaussNewtonReconstruction
 from models.ert.greit import GreitReconstruction
+from models.ert.learned_inverse import GreitLearnedInverse
 from models.ert.learned_readings_inverse import LearnedReadingsInverse
 from models.tikhonov_reconstruction import TikhonovReconstruction
 from runs.report.figure_files import write_figures
@@ -62,29 +63,32 @@ def scene_for(cfg, **overrides):
     return instantiate(node)
 
 
-RECONSTRUCTIONS = ("tikhonov", "gauss_newton", "greit", "learned_mlp")
+RECONSTRUCTIONS = ("tikhonov", "gauss_newton", "greit", "greit_learned", "learned_mlp")
 
 
 def fit_reconstruction(kind: str, cfg, seed: int, X, y, params: dict):
     """A reconstruction of `kind` for sensor `seed` of the scene in `cfg`, its hyper-parameters
     chosen (and Tikhonov's coefficient field fitted) on the validation presses (X, y): a
-    calibration recording, never test presses. GREIT and the learned MLP train on presses of
-    other simulated sensors (never `seed`)."""
+    calibration recording, never test presses. GREIT, the learned inverse on it and the learned
+    MLP train on presses of other simulated sensors (never `seed`)."""
     geometry = scene_for(cfg, seed=seed).geometry()
     params = dict(params)
     if kind == "tikhonov":
         model = TikhonovReconstruction(geometry=geometry, seed=seed, **params)
     elif kind == "gauss_newton":
         model = GaussNewtonReconstruction(geometry=geometry, **params)
-    elif kind in ("greit", "learned_mlp"):
+    elif kind in ("greit", "greit_learned", "learned_mlp"):
         training_scene = OmegaConf.to_container(cfg.scene, resolve=True)
-        if kind == "greit":
-            model = GreitReconstruction(geometry=geometry, training_scene=training_scene, **params)
-        else:
+        if kind == "learned_mlp":
             model = LearnedReadingsInverse(geometry=geometry, training_scene=training_scene, seed=seed, **params)
+        else:
+            learned = {k: params.pop(k) for k in ("half_width_px", "n_estimators", "max_features") if k in params}
+            model = GreitReconstruction(geometry=geometry, training_scene=training_scene, **params)
         if seed in model.training_sensor_seeds():
             raise InputError(f"{kind}: training_seed {model.training_seed} puts the sensor under test (seed {seed}) "
                              f"among the training sensors; choose another training_seed")
+        if kind == "greit_learned":
+            model = GreitLearnedInverse(greit=model, seed=seed, **learned)
     else:
         raise InputError(f"reconstruction kind must be one of {', '.join(RECONSTRUCTIONS)}, got '{kind}'")
     return model.fit(X, y)
@@ -111,6 +115,8 @@ def chosen_hyperparameters(model) -> dict:
         return {"alpha_relative": model.alpha_relative_}
     if isinstance(model, LearnedReadingsInverse):
         return {"noise_weight": model.noise_weight_}
+    if isinstance(model, GreitLearnedInverse):
+        model = model.greit_
     return {**model.params_, "threshold": model.threshold_}
 
 
@@ -118,6 +124,8 @@ def validation_localisation_mm(model) -> float:
     """The chosen setting's mean localisation error on the validation presses."""
     if isinstance(model, TikhonovReconstruction):
         return float(model.validation_scores_.min(axis=0)[0])
+    if isinstance(model, GreitLearnedInverse):
+        model = model.greit_
     return min(row["localisation_mm"] for row in model.validation_scores_)
 
 
