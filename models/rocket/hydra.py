@@ -1,7 +1,7 @@
 """The Hydra transform (Dempster, Tan, Schmidt and Webb 2023, "HYDRA: competing convolutional
 kernels for fast and accurate time series classification"), multichannel as in its multivariate
-variant, and Hydra concatenated with MiniRocket (the paper's Hydra + MiniRocket / "MR-Hydra"),
-as torch modules that both the eager pipeline and the ONNX export run.
+variant, and Hydra's features concatenated with MiniRocket's (the paper concatenates them with
+MultiRocket's, "Hydra + MultiRocket"; MultiRocket is not written here), as torch modules that both the eager pipeline and the ONNX export run.
 
 Hydra draws `n_groups` groups of `kernels_per_group` random kernels of length 9 (normal weights,
 each kernel made zero-mean and scaled to unit absolute sum) at every dilation 2^0 .. 2^floor(
@@ -87,8 +87,8 @@ class Hydra(nn.Module):
         self.dilations = nn.ModuleList([HydraDilation(n_channels, d, n_groups, kernels_per_group, rng)
                                         for d in hydra_dilations(length)])
         self.n_features = len(self.dilations) * 2 * n_groups * kernels_per_group
-        for name in ("mean", "scale", "epsilon"):
-            self.register_buffer(f"sparse_{name}", torch.zeros(self.n_features))
+        self.register_buffer("sparse_mean", torch.zeros(self.n_features))
+        self.register_buffer("sparse_scale", torch.ones(self.n_features))
 
     def counts(self, x: torch.Tensor) -> torch.Tensor:
         difference = x[..., 1:] - x[..., :-1]
@@ -104,7 +104,6 @@ class Hydra(nn.Module):
         epsilon = (root == 0).double().mean(0) ** SPARSE_EXPONENT + SPARSE_EPSILON
         self.sparse_mean.copy_(root.mean(0))
         self.sparse_scale.copy_(root.std(0) + epsilon)   # torch's std: n - 1, as the paper's code
-        self.sparse_epsilon.copy_(epsilon)
 
 
 class HydraMiniRocket(nn.Module):
