@@ -1,5 +1,6 @@
 """The ROCKET-family classifier behind the estimator contract: a random-kernel transform
-(models/rocket/minirocket.py), its features standardised, and a linear head.
+(`member`: MiniRocket, models/rocket/minirocket.py, or Hydra + MiniRocket, models/rocket/hydra.py),
+its features standardised (Hydra's by its own sparse scaler), and a linear head.
 
 Heads, as the papers advise: up to `ridge_max_samples` training windows, ridge regression onto
 +-1 class indicators with the penalty chosen by efficient leave-one-out (models/rocket/ridge_loo.py);
