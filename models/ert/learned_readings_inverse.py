@@ -7,7 +7,8 @@ GREIT-like linear map (Adler et al. 2009, eq. 8 and 10) from the 276 reduced rea
 u = K^T v (readings.py) to the 10 x 10 patch loads, trained on simulated presses whose desired
 image is the true patch loads (data/scenes/ert.py `patch_loads_n`, the scene's own footprint and
 foam spread), with a noise term lambda K^T K. Step two reads the press from the
-(2h + 1)^2 patches around the arg-max patch (relative loads and the log of the largest): an MLP
+(2h + 1)^2 patches around the patch whose 3 x 3 neighbourhood carries most load (relative loads
+and the log of the largest): an MLP
 predicts the offset from that patch's centre and the force. The window moves with the press, so
 every training press teaches the same local map (translation-equivariant, which is what lets a
 few thousand presses suffice; an MLP on all 276 readings needed far more and did worse).
@@ -61,7 +62,10 @@ class PatchWindowNet(nn.Module):
         """(patch-centre xy of the arg-max patch (n, 2), window features (n, (2h + 1)^2 + 1))."""
         loads = voltages @ self.load_map
         n, h = self.n_side, self.half_width
-        peak = loads.argmax(dim=1)
+        # the window sits on the patch whose 3 x 3 neighbourhood carries most load: the single
+        # largest patch of a weak press is at times a distant noise peak, the neighbourhood rarely
+        neighbourhood = nn.functional.avg_pool2d(loads.reshape(-1, 1, n, n), 3, stride=1, padding=1)
+        peak = neighbourhood.reshape(loads.shape[0], -1).argmax(dim=1)
         iy, ix = torch.div(peak, n, rounding_mode="floor"), torch.remainder(peak, n)
         padded = nn.functional.pad(loads.reshape(-1, n, n), (h, h, h, h)).reshape(loads.shape[0], -1)
         window = torch.gather(padded, 1, (iy * (n + 2 * h) + ix)[:, None] + self.window_index[None, :])
