@@ -30,7 +30,7 @@ def test_scikit_learn_estimator_checks_gaussian_process(estimator, check):
 
 def test_unknown_kind_and_bad_parameters_are_one_line_errors():
     X, y = np.random.default_rng(0).standard_normal((20, 3)), np.arange(20.0)
-    with pytest.raises(InputError, match="model.kind must be one of linear_regression, svr, gaussian_process"):
+    with pytest.raises(InputError, match="model.kind must be one of linear_regression, ridge, svr, gaussian_process"):
         ClassicRegressor(kind="lasso").fit(X, y)
     with pytest.raises(InputError, match="model.svr_c must be > 0"):
         ClassicRegressor(kind="svr", svr_c=0.0).fit(X, y)

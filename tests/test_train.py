@@ -17,10 +17,12 @@ from runs.report.metrics_file import json_safe
 from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
-CLASSIFIERS = {"prcnn", "rescnn", "inceptiontime", "lstm_fcn"}  # tested in test_tsc_models.py
+CLASSIFIERS = {"prcnn", "rescnn", "inceptiontime", "lstm_fcn",   # tested in test_tsc_models.py
+               "inceptiontime_ensemble"}                          # its averaging in test_net_recipes.py
+ROCKET_CLASSIFIERS = {"minirocket", "hydra_minirocket"}           # tested in test_rocket_runs.py, test_rocket_hydra.py
 TABLE_CLASSIFIERS = {"mlp", "logistic_regression"}                # tested in test_table_classification.py
 MODELS = sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml")
-                if p.stem not in CLASSIFIERS | TABLE_CLASSIFIERS)
+                if p.stem not in CLASSIFIERS | ROCKET_CLASSIFIERS | TABLE_CLASSIFIERS)
 # common/atomic.py renders each output into tempfile.mkstemp(prefix=f".{name}.", suffix=suffix) in
 # the output's folder: ".metrics.json.k2x9_a1b.json", ".parity.png.q0w8r7t6.png". A hidden
 # name, then more name, a dot and more: what a crashed or forgotten atomic write leaves behind.
@@ -38,9 +40,10 @@ def test_every_model_config_is_tested(compose_config):
     classifiers in test_table_classification.py. A classifier
     listed as a regression model, or the reverse, fails here."""
     for name in sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml")):
-        overrides = [f"model={name}"] + (["experiment=materials10"] if name in CLASSIFIERS else [])
+        overrides = [f"model={name}"] + (["experiment=materials10"] if name in CLASSIFIERS | ROCKET_CLASSIFIERS else [])
         target = compose_config(overrides).model._target_
         assert target.endswith("TimeSeriesClassifier") == (name in CLASSIFIERS), (name, target)
+        assert target.endswith("RocketClassifier") == (name in ROCKET_CLASSIFIERS), (name, target)
         assert target.endswith("TableClassifier") == (name in TABLE_CLASSIFIERS), (name, target)
     assert {"resmlp", "random_forest", "extra_trees", "decision_tree", "blend"} <= set(MODELS)
 
@@ -123,7 +126,7 @@ def train(*overrides, cwd):
 
 
 @pytest.mark.parametrize("overrides, message, code", [
-    (["model=gradient_magic"], "Could not find 'model/gradient_magic' Available options in 'model': blend", 2),
+    (["model=gradient_magic"], "Could not find 'model/gradient_magic' Available options in 'model': auto blend", 2),
     (["scene.n_samples=-5"], "error: scene.n_samples must be a positive integer, got -5", 2),
     (["scene.sparkle=1"], "Could not override 'scene.sparkle'", 2),
     (["+scene.effects.sparkle={}"], "error: scene rubber12: unknown effect 'sparkle'", 2),
