@@ -127,3 +127,23 @@ def test_same_seed_same_choice():
                                      "b": TreeRegressor(kind="random_forest", n_estimators=10, seed=0)}, seed=4)
     first, second = make().fit(X, y), make().fit(X, y)
     assert first.chosen_ == second.chosen_ and first.scores_ == second.scores_
+
+
+@pytest.mark.parametrize("n_val, first_wrong, chosen", [(8, 1, "cheap"), (8, 3, "cheap"), (40, 10, "costly")])
+def test_a_costlier_classifier_must_be_right_on_significantly_more_validation_rows(n_val, first_wrong, chosen):
+    """McNemar on the rows where exactly one is right: one or three recordings of eight are within
+    chance (z 1.0, 1.7), ten of forty are not (z 3.2)."""
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((100, 2))
+    y_val = rng.integers(0, 2, n_val)
+    signs = np.where(y_val == 1, 1.0, -1.0)
+    X_val = np.column_stack([signs, signs])             # both features carry the label ...
+    X_val[:first_wrong, 0] *= -1                        # ... the cheap one's misses a few rows
+    choice = ValidationChoice({"cheap": OneFeature(0), "costly": OneFeature(1)}, ensemble=False,
+                              relative_cost={"cheap": 1, "costly": 10})
+    choice.fit(X, (X[:, 0] > 0).astype(int), X_val, y_val)
+    assert choice.scores_["costly"]["accuracy"] == 1.0 > choice.scores_["cheap"]["accuracy"]
+    assert choice.chosen_ == chosen
+    assert ("not significantly more" in choice.reason_) == (chosen == "cheap")
+    with pytest.raises(InputError, match="model.significance_z must be a number >= 0"):
+        ValidationChoice({"cheap": OneFeature(0)}, significance_z=-1).fit(X, (X[:, 0] > 0).astype(int), X_val, y_val)
