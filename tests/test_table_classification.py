@@ -84,7 +84,8 @@ def test_the_default_model_chooses_among_the_table_classifiers_on_validation(com
     assert choice["task"] == "classification" and set(choice["validation"]) == {
         "logistic_regression", "mlp", "extra_trees", "random_forest"}
     best = max(choice["validation"].values(), key=lambda s: s["accuracy"])["accuracy"]
-    assert choice["validation"][choice["chosen"]]["accuracy"] == best
+    if choice["validation"][choice["chosen"]]["accuracy"] < best:   # a cheaper one kept: said, with the test
+        assert "not significantly more (McNemar" in choice["reason"]
     assert metrics["model"] == f"TableClassifier({choice['chosen']})"
     assert metrics["val"]["accuracy"] == choice["validation"][choice["chosen"]]["accuracy"]
     assert json.loads((run_dir / "metrics.json").read_text())["choice"]["reason"].startswith(f"chose {choice['chosen']}")
