@@ -28,7 +28,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
 from models.ert.priors import pixel_laplacian
-from models.ert.readings import pixel_sensitivity, transfer_basis
+from models.ert.readings import checked_voltages, pixel_sensitivity, transfer_basis
 
 
 def bilinear_matrix(n_out: int, n_in: int) -> np.ndarray:
@@ -100,20 +100,13 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
                              f"{self.pixels_per_side} and {self.deconvolution_sigma_mm}")
         return alphas
 
-    def _check_X(self, X, n_channels):
-        X = np.asarray(X, dtype=float)
-        if X.ndim != 2 or X.shape[1] != n_channels:
-            raise InputError(f"voltages must have shape (n_frames, {n_channels}), got {X.shape}")
-        if not np.isfinite(X).all():
-            raise InputError("voltages contain NaN or infinite values")
-        return X
 
     # -- fit ---------------------------------------------------------------------------------------
     def fit(self, X, y):
         """X: (n_presses, n_channels) calibration voltages; y: (n_presses, 3) x_mm, y_mm, force_n."""
         alphas = self._check_params()
         J = self.jacobian()
-        X = self._check_X(X, J.shape[0])
+        X = checked_voltages(X, J.shape[0])
         y = np.asarray(y, dtype=float)
         if y.ndim != 2 or y.shape[1] != 3 or len(y) != len(X):
             raise InputError(f"calibration targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
@@ -181,7 +174,7 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
     def force_pixels(self, X) -> np.ndarray:
         """(n_frames, n_pixels) force carried by each reconstruction pixel, in newtons."""
         check_is_fitted(self, "inverse_")
-        X = self._check_X(X, self.n_features_in_)
+        X = checked_voltages(X, self.n_features_in_)
         return self._deconvolve(X @ self.inverse_.T) * self.coefficient_field_
 
     def peak_window(self, X, half_width_px: int = 2) -> tuple[np.ndarray, np.ndarray]:

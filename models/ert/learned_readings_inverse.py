@@ -32,7 +32,7 @@ from torch import nn
 from common.errors import InputError
 from data.scenes.ert import patch_loads_n
 from models.ert.greit import GreitReconstruction
-from models.ert.readings import transfer_basis
+from models.ert.readings import checked_voltages, transfer_basis
 
 OFFSET_SCALE_MM = 10.0        # half a patch: the MLP's offsets are of order one
 FORCE_CENTRE_N, FORCE_SCALE_N = 8.0, 4.0
@@ -126,13 +126,6 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
             return 0.0
         return float((effect or {}).get("spread_per_thickness", 1.0)) * float(self.training_scene.get("foam_thickness_mm", 4.0))
 
-    def _check(self, X, n_channels):
-        X = np.asarray(X, dtype=float)
-        if X.ndim != 2 or X.shape[1] != n_channels:
-            raise InputError(f"voltages must have shape (n_frames, {n_channels}), got {X.shape}")
-        if not np.isfinite(X).all():
-            raise InputError("voltages contain NaN or infinite values")
-        return X
 
     def fit(self, X, y):
         """X, y: validation presses of the sensor under test (the noise weight is chosen there)."""
@@ -145,7 +138,7 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
         if weights.size == 0 or not (weights > 0).all():
             raise InputError(f"model.noise_weights must be positive, got {weights.tolist()}")
         basis = transfer_basis(self.geometry)
-        X = self._check(X, basis.shape[0])
+        X = checked_voltages(X, basis.shape[0])
         y = np.asarray(y, dtype=float)
         if y.ndim != 2 or y.shape[1] < 3 or len(y) != len(X):
             raise InputError(f"validation targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
@@ -209,6 +202,6 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
 
     def predict(self, X) -> np.ndarray:
         check_is_fitted(self, "module_")
-        X = self._check(X, self.n_features_in_)
+        X = checked_voltages(X, self.n_features_in_)
         with torch.no_grad():
             return self.module_(torch.from_numpy(np.array(X, dtype=np.float32))).numpy().astype(float)

@@ -14,20 +14,13 @@ from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
 from models.ert.image_readout import thresholded_centroid
-from models.ert.readings import transfer_basis
+from models.ert.readings import checked_voltages, transfer_basis
 
 
 class LinearImageReconstruction(RegressorMixin, BaseEstimator):
     """Subclasses set `geometry`, `thresholds`, `quantification_limit_n` and implement
     `_candidates(basis)` -> iterable of (params dict, A (n_pixels, n_z)) and `_centres()`."""
 
-    def _check_X(self, X, n_channels):
-        X = np.asarray(X, dtype=float)
-        if X.ndim != 2 or X.shape[1] != n_channels:
-            raise InputError(f"voltages must have shape (n_frames, {n_channels}), got {X.shape}")
-        if not np.isfinite(X).all():
-            raise InputError("voltages contain NaN or infinite values")
-        return X
 
     def fit(self, X, y):
         """X: (n_presses, n_channels) validation voltages; y: (n_presses, 3) x_mm, y_mm, force_n."""
@@ -37,7 +30,7 @@ class LinearImageReconstruction(RegressorMixin, BaseEstimator):
         if thresholds.size == 0 or not ((thresholds >= 0) & (thresholds < 1)).all():
             raise InputError(f"model.thresholds must lie in [0, 1), got {thresholds.tolist()}")
         basis = transfer_basis(self.geometry)
-        X = self._check_X(X, basis.shape[0])
+        X = checked_voltages(X, basis.shape[0])
         y = np.asarray(y, dtype=float)
         if y.ndim != 2 or y.shape[1] < 3 or len(y) != len(X):
             raise InputError(f"validation targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
@@ -69,7 +62,7 @@ class LinearImageReconstruction(RegressorMixin, BaseEstimator):
     def image(self, X) -> np.ndarray:
         """(n_frames, n_pixels) reconstructed image (rows in y, columns in x of `pixel_centres_mm_`)."""
         check_is_fitted(self, "image_map_")
-        X = self._check_X(X, self.n_features_in_)
+        X = checked_voltages(X, self.n_features_in_)
         return (X @ self.compression_.T) @ self.image_map_.T
 
     def predict(self, X) -> np.ndarray:

@@ -13,6 +13,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from data.physics.sheet_conduction import PatchUpdateSolver, SheetGrid, SheetSolver, four_terminal_matrix
+from common.errors import InputError
 from data.scenes.ert import injection_pairs, measurement_pairs, patch_weights
 
 
@@ -60,3 +61,13 @@ def pixel_sensitivity(geometry: dict, pixels_per_side: int) -> np.ndarray:
     dz = solver.transfer_resistance_jacobian(share)                          # (n_pixels, N, N)
     entries = unique_transfer_entries(len(electrodes))
     return dz[:, entries[:, 0], entries[:, 1]].T
+
+
+def checked_voltages(X, n_channels: int) -> np.ndarray:
+    """Frames of voltages as float, refused in one line unless (n_frames, n_channels) and finite."""
+    X = np.asarray(X, dtype=float)
+    if X.ndim != 2 or X.shape[1] != n_channels:
+        raise InputError(f"voltages must have shape (n_frames, {n_channels}), got {X.shape}")
+    if not np.isfinite(X).all():
+        raise InputError("voltages contain NaN or infinite values")
+    return X
