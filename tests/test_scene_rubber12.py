@@ -299,6 +299,15 @@ def test_load_cell_noise_is_the_per_sample_noise_over_root_50():
                                          rel=1e-3)
 
 
+def test_a_press_that_misses_a_thin_spot_reads_zero_not_a_negative_pressure():
+    # 0.3 mm rms thickness: the thinnest spots are thinner than the first 0.3 mm step, so some
+    # presses touch nothing and the load cell reads only its noise around zero
+    scene = Rubber12Scene(effects={"specimen": {"thickness_rms_mm": 0.3}, "contact": {},
+                                   "load_cell": {"noise_n": 0.5}}, progress=False)
+    pressure = scene.generate().frame["pressure_pa"].to_numpy()
+    assert np.all(pressure >= 0) and np.any(pressure == 0) and np.any(pressure > 0)
+
+
 def test_film_strain_is_incompressible_and_only_where_the_gel_moves():
     scene = Rubber12Scene(effects={"contact": {}}, progress=False)
     solver, _ = scene._solvers()

@@ -315,7 +315,8 @@ def load_cell(state, rng, noise_n=0.05, samples_averaged=50, resolution_n=0.01):
     """The load cell that measured force: Gaussian noise of `noise_n` per sample, averaged over
     the same `samples_averaged` samples as the channels, read to `resolution_n` (quantisation).
     Values are estimates for a small strain-gauge load cell with a 24-bit bridge ADC (the paper
-    names neither). The reported pressure is the measured force over the probe area."""
+    names neither). The reported pressure is the measured force over the probe area; a reading
+    below zero (noise when the probe misses the gel) is reported as zero."""
     if noise_n < 0 or samples_averaged < 1 or resolution_n < 0:
         raise InputError(f"scene rubber12: load_cell needs noise_n >= 0, samples_averaged >= 1 and "
                          f"resolution_n >= 0, got {noise_n}, {samples_averaged}, {resolution_n}")
@@ -323,6 +324,9 @@ def load_cell(state, rng, noise_n=0.05, samples_averaged=50, resolution_n=0.01):
     measured = force + rng.normal(0.0, noise_n / np.sqrt(samples_averaged), size=force.shape)
     if resolution_n > 0:
         measured = resolution_n * np.rint(measured / resolution_n)
+    # A press that misses a thin spot of the gel loads nothing: its reading is the cell's noise
+    # around zero, and a contact force or pressure below zero is not a reading of a press.
+    measured = np.maximum(measured, 0.0)
     state["pressure_pa"] = mean_pressure_pa(measured, state["probe_radius_mm"])
     state["force_n"] = measured
 
