@@ -1,0 +1,145 @@
+"""How fast can a standard-op ONNX graph count MiniRocket's PPV features at all?
+
+    .venv/bin/python bench/onnx_ppv_floor.py                    # lengths 150 251 427 1460, 9,996 features
+    .venv/bin/python bench/onnx_ppv_floor.py --lengths 1460 --repeats 3
+
+MiniRocket's features are proportions of positive values: for each of its 9,996 (kernel,
+dilation, bias) triples, the share of the L positions where the kernel output exceeds the bias.
+aeon computes them in one numba loop that never stores a comparison; onnxruntime runs each node
+of a graph as its own pass over memory, so every formulation of the count stores 9,996 x L
+intermediate values at least once. This bench times that count ALONE, with the kernel outputs
+given as the graph's input (no transform, no head: a lower bound for any exported MiniRocket
+that counts this way), in every formulation the standard operator sets offer:
+  greater_cast_mean    Greater -> Cast(float) -> ReduceMean                 (models/rocket/minirocket.py)
+  sub_sign_sum         Sub -> Sign -> ReduceSum, (sum + L) / 2L
+  greater_uint8_matmul Greater -> Cast(uint8) -> MatMulInteger with ones    (bytes, not floats)
+  binarizer_mean       Sub -> ai.onnx.ml Binarizer -> ReduceMean            (compare and cast in one node)
+  relu_min_sum         Sub -> Mul(big) -> Clip(0, 1) -> ReduceMean          (saturating step; equal except
+                       within 1/big of a bias)
+one thread, batch 1, median of `--repeats` x 50 calls. The layout follows the exported graph: per
+dilation, the 84 kernels' outputs (84, 1, L) against their biases (84, features at that dilation),
+with MiniRocket's dilations and feature counts at each length (dilations_and_features). Compare
+with aeon's predict per recording in bench/rocket_parity.py, run beside it under the same load.
+"""
+import argparse
+import os
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+import onnx  # noqa: E402
+import onnxruntime as ort  # noqa: E402
+from onnx import TensorProto, helper, numpy_helper  # noqa: E402
+
+from models.rocket.minirocket import N_KERNELS, dilations_and_features  # noqa: E402
+
+FORMULATIONS = ("greater_cast_mean", "sub_sign_sum", "greater_uint8_matmul", "binarizer_mean", "relu_min_sum")
+
+
+def count_nodes(formulation: str, biases: np.ndarray, length: int, k: int) -> tuple[list, list]:
+    """Nodes and initialisers from one dilation's kernel outputs `c{k}` (84, 1, L) to its
+    (84, features) PPVs `ppv{k}` against `biases` (84, features)."""
+    def name(base):
+        return f"{base}{k}"
+
+    def const(base, value):
+        return numpy_helper.from_array(np.asarray(value), name(base))
+
+    inits = [const("biases", biases[:, :, None].astype(np.float32)), const("axes", np.array([2], dtype=np.int64))]
+    c, b, axes = name("c"), name("biases"), name("axes")
+    if formulation == "greater_cast_mean":
+        nodes = [helper.make_node("Greater", [c, b], [name("above")]),
+                 helper.make_node("Cast", [name("above")], [name("above_f")], to=TensorProto.FLOAT),
+                 helper.make_node("ReduceMean", [name("above_f"), axes], [name("ppv")], keepdims=0)]
+    elif formulation == "sub_sign_sum":   # a tie's sign 0 counts half: the exported graph uses Greater
+        inits += [const("half", np.float32(0.5 / length)), const("offset", np.float32(0.5))]
+        nodes = [helper.make_node("Sub", [c, b], [name("d")]), helper.make_node("Sign", [name("d")], [name("s")]),
+                 helper.make_node("ReduceSum", [name("s"), axes], [name("total")], keepdims=0),
+                 helper.make_node("Mul", [name("total"), name("half")], [name("scaled")]),
+                 helper.make_node("Add", [name("scaled"), name("offset")], [name("ppv")])]
+    elif formulation == "greater_uint8_matmul":
+        inits = inits[:1] + [const("ones", np.ones((length, 1), dtype=np.uint8)), const("scale", np.float32(1.0 / length)),
+                             const("shape", np.array(biases.shape, dtype=np.int64))]
+        nodes = [helper.make_node("Greater", [c, b], [name("above")]),
+                 helper.make_node("Cast", [name("above")], [name("above_u8")], to=TensorProto.UINT8),
+                 helper.make_node("MatMulInteger", [name("above_u8"), name("ones")], [name("count")]),
+                 helper.make_node("Cast", [name("count")], [name("count_f")], to=TensorProto.FLOAT),
+                 helper.make_node("Mul", [name("count_f"), name("scale")], [name("scaled")]),
+                 helper.make_node("Reshape", [name("scaled"), name("shape")], [name("ppv")])]
+    elif formulation == "binarizer_mean":
+        nodes = [helper.make_node("Sub", [c, b], [name("d")]),
+                 helper.make_node("Binarizer", [name("d")], [name("above_f")], domain="ai.onnx.ml", threshold=0.0),
+                 helper.make_node("ReduceMean", [name("above_f"), axes], [name("ppv")], keepdims=0)]
+    elif formulation == "relu_min_sum":
+        inits += [const("big", np.float32(1e6)), const("low", np.float32(0.0)), const("high", np.float32(1.0))]
+        nodes = [helper.make_node("Sub", [c, b], [name("d")]), helper.make_node("Mul", [name("d"), name("big")], [name("e")]),
+                 helper.make_node("Clip", [name("e"), name("low"), name("high")], [name("step")]),
+                 helper.make_node("ReduceMean", [name("step"), axes], [name("ppv")], keepdims=0)]
+    else:
+        raise ValueError(f"unknown formulation {formulation}")
+    return nodes, inits
+
+
+def count_graph(formulation: str, biases: list, length: int) -> onnx.ModelProto:
+    """A graph from each dilation's kernel outputs (84, 1, L) to all its PPVs, concatenated."""
+    nodes, inits = [], []
+    for k, per_dilation in enumerate(biases):
+        more_nodes, more_inits = count_nodes(formulation, per_dilation, length, k)
+        nodes += more_nodes
+        inits += more_inits
+    nodes.append(helper.make_node("Concat", [f"ppv{k}" for k in range(len(biases))], ["ppv"], axis=1))
+    inputs = [helper.make_tensor_value_info(f"c{k}", TensorProto.FLOAT, [N_KERNELS, 1, length])
+              for k in range(len(biases))]
+    graph = helper.make_graph(nodes, formulation, inputs, [helper.make_tensor_value_info("ppv", TensorProto.FLOAT, None)],
+                              inits)
+    return helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18), helper.make_opsetid("ai.onnx.ml", 3)])
+
+
+def time_ms(session, feed, repeats: int) -> float:
+    for _ in range(5):
+        session.run(None, feed)
+    medians = []
+    for _ in range(repeats):
+        calls = []
+        for _ in range(50):
+            start = time.perf_counter()
+            session.run(None, feed)
+            calls.append(time.perf_counter() - start)
+        medians.append(1e3 * float(np.median(calls)))
+    return float(np.median(medians))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--lengths", nargs="+", type=int, default=[150, 251, 427, 1460])
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    rng = np.random.default_rng(0)
+    options = ort.SessionOptions()
+    options.intra_op_num_threads = options.inter_op_num_threads = 1
+    print("| length | dilations, features x L (comparisons) | " + " | ".join(FORMULATIONS) + " | load average |")
+    print("|---|---|" + "---|" * len(FORMULATIONS) + "---|")
+    for length in args.lengths:
+        _, counts = dilations_and_features(length, 9_996)
+        outputs = [rng.normal(size=(N_KERNELS, 1, length)).astype(np.float32) for _ in counts]
+        biases = [np.sort(rng.normal(size=(N_KERNELS, count)), axis=1).astype(np.float32) for count in counts]
+        reference = np.concatenate([(c > b[:, :, None]).mean(axis=2) for c, b in zip(outputs, biases)], axis=1)
+        feed = {f"c{k}": c for k, c in enumerate(outputs)}
+        cells = []
+        for formulation in FORMULATIONS:
+            session = ort.InferenceSession(count_graph(formulation, biases, length).SerializeToString(), options,
+                                           providers=["CPUExecutionProvider"])
+            ppv = session.run(None, feed)[0]
+            assert np.abs(ppv - reference).max() <= 1.0 / length + 1e-6, formulation   # the same counts, up to a tie
+            cells.append(f"{time_ms(session, feed, args.repeats):.2f}")
+        print(f"| {length} | {len(counts)}, {reference.shape[1]} x {length} ({reference.size * length / 1e6:.1f} M) | "
+              + " | ".join(cells) + f" | {os.getloadavg()[0]:.1f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
