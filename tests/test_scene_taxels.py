@@ -334,6 +334,7 @@ LAYER = ["~scene.effects.flat", "+scene.effects.finite_layer={}"]   # the defaul
     (["scene.pitch_mm=-1"], "pitch_mm"),
     (["scene.effects.plate_averaging.side_um=0"], "side_um"),
     (["scene.effects.plate_averaging.side_um=-350"], "side_um"),
+    (["scene.effects.plate_averaging.pressure_moment=sometimes"], "pressure_moment"),
     (LAYER + ["+scene.effects.finite_layer.interface=glued"], "interface"),
     (LAYER + ["+scene.effects.finite_layer.interface=frictionless"], "cannot carry a shear load"),
     (LAYER + ["+scene.effects.finite_layer.sensing=cover_strain"], "does not strain"),

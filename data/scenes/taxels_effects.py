@@ -69,23 +69,43 @@ def needle(state, diameter_um=100.0, rings=1, points_per_ring=8):
         state[key] = state[key] * w
 
 
-def plate_averaging(state, points_per_side=2, side_um=None):
+def plate_averaging(state, points_per_side=2, side_um=None, pressure_moment=False):
     """A taxel's bridges sit around a plate, not at one point: the strain is averaged over a
     square of side `side_um` (default: the plate, `plate_side_um`) by Gauss-Legendre quadrature
     (points_per_side^2 points). The plate and its four bridges form one suspended membrane over
     the etched cavity (seed 004 sec. 2, Fig. 1), and the rubber coats and infiltrates all of it,
     so `side_um` may be the whole membrane's: the length besides the cover thickness that the real
     geometry adds (seed 004 sec. 5 puts the narrower, flatter measured profiles down to the real
-    geometry). The area that turns strain into force for the bridge constants stays the plate's."""
+    geometry). The area that turns strain into force for the bridge constants stays the plate's.
+
+    pressure_moment: the membrane is one stiff body on its four bridges, whose piezoresistors sit
+    at the suspension points, half a side from the centre (seed 004 Fig. 1). Rigid-body statics
+    on four equal supports (the same statics as `bump`): the sum of the bridges reads the
+    resultant normal load, and each difference (left - right, down - up) reads the moment that
+    tilts the membrane about its centre. The shear traction tilts it through the die's force arm
+    (seed 004 sec. 7: a hair "elongates the force arm"); the normal load tilts it through its
+    own offset, the first moment of the pressure over the membrane. Off-centre pressure therefore
+    enters the shear reading. With the scene's read-out (the die's shear and normal force
+    sensitivities equal, `TaxelsScene.bridge_constants`) the force arm equals the supports'
+    offset s = side / 2, and the pressure E eps_z turns into the equivalent shear strain
+        gamma_x += -(E / (2 G s)) <x eps_z> = -((1 + nu) / s) <x eps_z>   (y likewise),
+    <.> the average over the membrane, x from its centre. Near the load the pressure's moment
+    opposes the traction's (the rubber is pushed away from the load, the pressure is highest on
+    the side towards it), which lowers the shear sensitivity of a normal scan (fidelity row 4;
+    docs/taxels.md). No parameter besides the membrane's side enters."""
     side = state["geometry"]["plate_side_um"] if side_um is None else side_um
     if points_per_side < 1 or not (np.isfinite(side) and side > 0):
         raise InputError(f"scene taxels: plate_averaging needs points_per_side >= 1 and side_um > 0, "
                          f"got {points_per_side}, {side_um}")
+    if not isinstance(pressure_moment, bool):
+        raise InputError(f"scene taxels: plate_averaging.pressure_moment must be true or false, got {pressure_moment!r}")
     nodes, weights = np.polynomial.legendre.leggauss(int(points_per_side))
     half = 0.5e-6 * side
     gx, gy = np.meshgrid(nodes * half, nodes * half)
     state["sensing_offsets_m"] = np.column_stack([gx.ravel(), gy.ravel()])
     state["sensing_weights"] = np.outer(weights, weights).ravel() / 4.0
+    if pressure_moment:
+        state["tilt_lever_m"] = half
 
 
 def hair(state, length_um=1000.0, capture_radius_um=250.0, boss_height_um=100.0):
@@ -248,7 +268,12 @@ def _field_at_taxels(state, field_fn):
     depth = state["thickness_m"][:, None, None, None]
     gamma_x, gamma_y, eps_z = field_fn(dx, dy, depth, state["normal_n"][shape],
                                        state["shear_x_n"][shape], state["shear_y_n"][shape])
-    return np.stack([np.einsum("nmts,s->nt", c, weights) for c in (gamma_x, gamma_y, eps_z)], axis=-1)
+    strain = np.stack([np.einsum("nmts,s->nt", c, weights) for c in (gamma_x, gamma_y, eps_z)], axis=-1)
+    if "tilt_lever_m" in state:          # plate_averaging(pressure_moment=True): its docstring
+        per_strain = (1.0 + state["geometry"]["poisson_ratio"]) / state["tilt_lever_m"]
+        moments = np.einsum("nmts,s,sk->ntk", eps_z, weights, state["sensing_offsets_m"])
+        strain[..., :2] -= per_strain * moments
+    return strain
 
 
 def flat(state):
