@@ -31,9 +31,7 @@ from sklearn.metrics import r2_score  # noqa: E402
 from runs.fidelity.observations import (  # noqa: E402
     CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, run_checks, scene_params)
 from runs.fidelity.rubber12 import (  # noqa: E402
-    CORNERS,
     SceneProbe,
-    _sensitivity_per_mm,
     centre_widest_range,
     corners_least_sensitive,
     extra_trees_r2,
@@ -50,9 +48,9 @@ PATTERNS = {"adjacent": "adjacent", "i vs i+3": [[i, (i + 2) % 12 + 1] for i in 
 
 def compare_patterns(config: str, overrides, repeats: int) -> str:
     """The sensitivity rows (4, 5), the mirror row (6) and the forest's x, y R^2 (11) for each
-    readout pattern on the same scene."""
+    readout pattern on the same scene, each the mean over the rows' seeds."""
     lines = [("| readout | channels | sensitivity per mm: corners / edge mid / centre (row 4) | "
-              "P5 span / best span (row 5) | mirror ambiguity edge / centre (row 6) | R² x, y (row 11, 3 hold-outs) | "
+              "P5 span / best span (row 5) | mirror ambiguity edge / centre (row 6) | R² x, y (row 11, seeds 0-2) | "
               f"R² x / y / depth, random presses ({RANDOM_PRESSES}, seeds 0-2, mean ± sd) |"),
              "|---|---|---|---|---|---|---|"]
     params = scene_params(config, overrides)
@@ -60,8 +58,7 @@ def compare_patterns(config: str, overrides, repeats: int) -> str:
         probe = SceneProbe({**params, "measurement": pattern}, repeats=repeats)
         four, five = corners_least_sensitive(probe).numbers, centre_widest_range(probe).numbers
         six, r2 = mirror_ambiguity_worst_at_edges(probe).numbers, extra_trees_r2(probe).numbers
-        corner_mean = _mean_corners(probe)
-        lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {100 * corner_mean:.2f} / "
+        lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {100 * four['corner_mean']:.2f} / "
                      f"{100 * four['edge_mean']:.2f} / {100 * four['centre']:.2f} % | "
                      f"{five['range'][4] / max(five['range']):.2f} | {six['edge']:.3f} / {six['centre']:.3f} | "
                      f"{r2['r2'][0]:.3f} ± {r2['r2_sd'][0]:.3f}, {r2['r2'][1]:.3f} ± {r2['r2_sd'][1]:.3f} | "
@@ -86,10 +83,6 @@ def _random_press_r2(params, pattern) -> str:
         scores.append(r2_score(targets[test], forest.predict(features[test]), multioutput="raw_values")[:3])
     mean, sd = np.mean(scores, axis=0), np.std(scores, axis=0, ddof=1)
     return " / ".join(f"{m:.3f} ± {s:.3f}" for m, s in zip(mean, sd))
-
-
-def _mean_corners(probe) -> float:
-    return float(_sensitivity_per_mm(probe)[CORNERS].mean())
 
 
 def scene_section(scene: str, args) -> tuple[str, int, int, int]:

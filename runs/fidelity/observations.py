@@ -7,11 +7,13 @@ Each scene's checks live in their own module (`SCENE_MODULES`); `load_scene` imp
 scene whose module is not written yet is reported as such instead of failing the others. A
 check gets a probe: the class the module registers with `@probe(scene)`, or else `SceneConfig`
 (the composed scene config as a dict, `params`, and `repeats`), built from the scene's config
-`CONFIGS[scene]` plus any Hydra overrides."""
+`CONFIGS[scene]` plus any Hydra overrides. Rows measured on a scene's random draws are measured
+at each of `SEEDS` and reported as mean ± sd (`judged_over_seeds`)."""
 import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
+import numpy as np
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
@@ -22,8 +24,9 @@ SCENE_MODULES = {"rubber12": "runs.fidelity.rubber12", "fingertip": "runs.fideli
                  "capacitive6x6": "runs.fidelity.capacitive6x6", "ert": "runs.fidelity.ert",
                  "taxels": "runs.fidelity.taxels"}
 CONFIGS = {"rubber12": "rubber12", "fingertip": "fingertip", "capacitive6x6": "capacitive6x6",
-           "ert": "ert_internal", "taxels": "taxels"}
+           "ert": "ert_indentation_internal", "taxels": "taxels"}
 PROBES: dict[str, type] = {}
+SEEDS = (0, 1, 2)   # scene seeds (specimen, noise draws) the rows of rubber12 and fingertip are measured over
 
 
 @dataclass
@@ -94,6 +97,28 @@ def run_checks(scene: str, probe) -> list[Row]:
         rows.append(Row(name, number, statement, paper, fn(probe)))
     return rows
 
+
+def mean_sd(values, digits=2) -> str:
+    values = np.asarray(values, dtype=float)
+    return f"{values.mean():.{digits}f} ± {values.std(ddof=1) if values.size > 1 else 0.0:.{digits}f}"
+
+
+def seeds_label(seeds) -> str:
+    return f"seed {seeds[0]}" if len(seeds) == 1 else f"seeds {seeds[0]}-{seeds[-1]}"
+
+
+def judged_over_seeds(value: str, holds_at_seed, holds_on_mean: bool, tolerance: str, seeds,
+                      numbers: dict) -> Measured:
+    """A row measured at several scene seeds holds when it holds on the mean over the seeds and at
+    every seed; where the two disagree (a row that flips on a seed) the value says at which seeds it
+    holds and whether on the mean."""
+    holds_at_seed = [bool(h) for h in holds_at_seed]
+    holds = bool(holds_on_mean) and all(holds_at_seed)
+    if not holds and (holds_on_mean or any(holds_at_seed)):
+        held = [str(s) for s, h in zip(seeds, holds_at_seed) if h]
+        value += (f"; flips across seeds: holds at {len(held)} of {len(seeds)} ({', '.join(held) or 'none'}), "
+                  f"{'and' if holds_on_mean else 'not'} on the mean")
+    return Measured(value, holds, f"{tolerance}, on the mean and at every seed", numbers)
 
 
 def scene_params(config: str, overrides=()) -> dict:

@@ -11,7 +11,9 @@ row that holds. Fingertip (seed 003) rows go in `CHECKS["fingertip"]` the same w
 "Holds" follows the notes file's rule: the same measurement on simulated data agrees in
 direction and, where the paper gives a number, in order of magnitude; each row states its
 tolerance. Noise-free quantities (sensitivities, shapes) use the scene's field effects only
-(its listed physics, no acquisition noise); noise quantities use every listed effect.
+(its listed physics, no acquisition noise); noise quantities use every listed effect. Every
+row is measured at scene seeds 0-2 (`SEEDS`) and holds when it holds on the mean and at every
+seed (`judged_over_seeds`).
 """
 from functools import cached_property
 
@@ -20,7 +22,7 @@ import numpy as np
 from data.preprocessing.features import FEATURE_GROUPS, compute_features
 from data.scenes.rubber12 import Rubber12Scene
 from data.scenes.rubber12_effects import FIELD_EFFECTS
-from runs.fidelity.observations import Measured, observation, probe
+from runs.fidelity.observations import SEEDS, Measured, judged_over_seeds, mean_sd, observation, probe, seeds_label
 
 
 # -- rubber12 ------------------------------------------------------------------------------------
@@ -28,12 +30,21 @@ from runs.fidelity.observations import Measured, observation, probe
 class SceneProbe:
     """Presses on one rubber12 configuration (`params`: the composed scene config as a dict).
 
-    `repeats` sets the sample counts: the table uses the lab's sizes, tests smaller ones."""
+    `repeats` sets the sample counts: the table uses the lab's sizes, tests smaller ones. Each
+    row is measured at every seed of `seeds` (the scene's specimen map and noise draws; rows 10-11
+    also the hold-out and the forest) and reported as mean ± sd; the cached presses below are
+    those of `params["seed"]`, `seeded` holds one probe per seed."""
 
-    def __init__(self, params: dict, repeats: int = 20):
+    def __init__(self, params: dict, repeats: int = 20, seeds=SEEDS):
         self.params = {k: v for k, v in params.items() if k not in ("_target_", "_convert_")}
         self.params["progress"] = False
         self.repeats = repeats
+        self.seeds = tuple(seeds)
+
+    @cached_property
+    def seeded(self) -> list["SceneProbe"]:
+        return [self if seed == self.params.get("seed") else SceneProbe({**self.params, "seed": seed}, self.repeats, (seed,))
+                for seed in self.seeds]
 
     def scene(self, effects=None, **overrides) -> Rubber12Scene:
         params = {**self.params, **overrides}
@@ -106,90 +117,115 @@ def _aggregate(relative):
 CORNERS, EDGE_MIDPOINTS, CENTRE = [0, 2, 6, 8], [1, 3, 5, 7], 4
 
 
+def _by_seed(probe, measure) -> np.ndarray:
+    """`measure` of each seed's scene, stacked: (seeds, ...)."""
+    return np.array([measure(one) for one in probe.seeded])
+
+
+def _seeds(probe) -> str:
+    return seeds_label(probe.seeds)
+
+
 @observation("rubber12", "1", "Repeated measurements at one position vary by a coefficient of variation "
              "below 2.3 % on every channel (§II-E)", "CV < 2.3 %")
 def repeat_cv(probe: SceneProbe) -> Measured:
-    readings, _ = probe.repeat_noise
-    cv = readings.std(axis=1, ddof=1) / readings.mean(axis=1)
-    worst = float(cv.max())
-    return Measured(f"largest CV {100 * worst:.2f} % (P1-P9 at {np.median(probe.depths_mm):.2f} mm, "
-                    f"{probe.repeats} repeats, every listed effect)", 0.0 < worst < 0.023,
-                    "0 < CV < 2.3 %", {"max_cv": worst})
+    def worst_cv(one):
+        readings, _ = one.repeat_noise
+        return (readings.std(axis=1, ddof=1) / readings.mean(axis=1)).max()
+    worst = _by_seed(probe, worst_cv)
+    return judged_over_seeds(f"largest CV {mean_sd(100 * worst)} % (P1-P9 at {np.median(probe.depths_mm):.2f} mm, "
+                             f"{probe.repeats} repeats, every listed effect; {_seeds(probe)}, mean ± sd)",
+                             (0.0 < worst) & (worst < 0.023), 0.0 < worst.mean() < 0.023, "0 < CV < 2.3 %",
+                             probe.seeds, {"max_cv": float(worst.mean()), "by_seed": {"max_cv": worst.tolist()}})
 
 
 @observation("rubber12", "2", "Resistance changes nonlinearly with depth, consistent with percolation and "
              "tunnelling (§II-F, Fig. 4)")
 def nonlinear_depth(probe: SceneProbe) -> Measured:
-    relative, _ = probe.curves
-    response = _aggregate(relative)                    # (points, depths)
-    depth = probe.depths_mm
-    deviation = []
-    for curve in response:
-        fit = np.polyval(np.polyfit(depth, curve, 1), depth)
-        deviation.append(np.abs(curve - fit).max() / max(np.ptp(curve), 1e-300))
-    median = float(np.median(deviation))
-    return Measured(f"aggregate change departs from its best straight line by {100 * median:.1f} % of its "
-                    f"span (median of P1-P9)", median >= 0.05, "departure >= 5 % of span",
-                    {"median_departure": median})
+    def median_departure(one):
+        depth, deviation = one.depths_mm, []
+        for curve in _aggregate(one.curves[0]):             # (points, depths)
+            fit = np.polyval(np.polyfit(depth, curve, 1), depth)
+            deviation.append(np.abs(curve - fit).max() / max(np.ptp(curve), 1e-300))
+        return np.median(deviation)
+    median = _by_seed(probe, median_departure)
+    return judged_over_seeds(f"aggregate change departs from its best straight line by {mean_sd(100 * median, 1)} % "
+                             f"of its span (median of P1-P9; {_seeds(probe)}, mean ± sd)", median >= 0.05,
+                             median.mean() >= 0.05, "departure >= 5 % of span", probe.seeds,
+                             {"median_departure": float(median.mean()), "by_seed": {"median_departure": median.tolist()}})
+
+
+FORCE_DEPTHS_MM = (0.3, 0.9, 1.2, 3.0)   # the depths of the paper's Fig. 4
 
 
 @observation("rubber12", "3a", "Force at equal depth differs substantially from position to position "
              "(Fig. 4; 0.3, 0.9, 1.2, 3.0 mm)", "\"substantial\" (no number)")
 def force_varies_with_position(probe: SceneProbe) -> Measured:
-    depths = [0.3, 0.9, 1.2, 3.0]
-    x = np.repeat(probe.points[:, 0], len(depths))
-    y = np.repeat(probe.points[:, 1], len(depths))
-    depth = np.tile(depths, len(probe.points))
-    table = probe.scene(probe.reading_effects_without_normalisation).simulate(x, y, depth)
-    pressure = table.frame["pressure_pa"].to_numpy().reshape(len(probe.points), len(depths))
-    cv = pressure.std(axis=0, ddof=1) / pressure.mean(axis=0)
-    smallest = float(cv.min())
-    return Measured("CV of pressure over P1-P9: " + ", ".join(f"{d:g} mm {100 * c:.1f} %" for d, c in zip(depths, cv)),
-                    smallest >= 0.10, "CV >= 10 % at every depth", {"min_cv": smallest})
+    def cv_by_depth(one):
+        n = len(FORCE_DEPTHS_MM)
+        x, y = np.repeat(one.points[:, 0], n), np.repeat(one.points[:, 1], n)
+        table = one.scene(one.reading_effects_without_normalisation).simulate(x, y, np.tile(FORCE_DEPTHS_MM, len(one.points)))
+        pressure = table.frame["pressure_pa"].to_numpy().reshape(len(one.points), n)
+        return pressure.std(axis=0, ddof=1) / pressure.mean(axis=0)
+    cv = _by_seed(probe, cv_by_depth)                       # (seeds, depths)
+    return judged_over_seeds("CV of pressure over P1-P9: " + ", ".join(
+        f"{d:g} mm {mean_sd(100 * c, 1)} %" for d, c in zip(FORCE_DEPTHS_MM, cv.T)) + f" ({_seeds(probe)}, mean ± sd)",
+        cv.min(axis=1) >= 0.10, cv.mean(axis=0).min() >= 0.10, "CV >= 10 % at every depth", probe.seeds,
+        {"min_cv": float(cv.mean(axis=0).min()), "by_seed": {"min_cv": cv.min(axis=1).tolist()}})
 
 
 @observation("rubber12", "3b", "The load cell measures force independently of depth (§II-E): pressure is "
              "a target of its own", "— (our criterion: corr(P, depth) < 0.99)")
 def pressure_is_not_depth(probe: SceneProbe) -> Measured:
-    frame = probe.lab_table.frame
-    corr = float(np.corrcoef(frame["pressure_pa"], frame["depth_mm"])[0, 1])
-    return Measured(f"corr(pressure, depth) = {corr:.4f} on the lab protocol ({len(frame)} presses)",
-                    corr < 0.99, "correlation < 0.99", {"corr": corr})
+    corr = _by_seed(probe, lambda one: np.corrcoef(one.lab_table.frame["pressure_pa"], one.lab_table.frame["depth_mm"])[0, 1])
+    return judged_over_seeds(f"corr(pressure, depth) = {mean_sd(corr, 4)} on the lab protocol "
+                             f"({len(probe.lab_table.frame)} presses; {_seeds(probe)}, mean ± sd)", corr < 0.99,
+                             corr.mean() < 0.99, "correlation < 0.99", probe.seeds,
+                             {"corr": float(corr.mean()), "by_seed": {"corr": corr.tolist()}})
 
 
-def _sensitivity_per_mm(probe):
-    relative, _ = probe.curves
-    response = _aggregate(relative)
-    return (response[:, -1] - response[:, 0]) / np.ptp(probe.depths_mm)
+def _sensitivity_per_mm(one):
+    response = _aggregate(one.curves[0])
+    return (response[:, -1] - response[:, 0]) / np.ptp(one.depths_mm)
 
 
 @observation("rubber12", "4", "Corner positions (P1, P3, P7, P9) have lower piezoresistive sensitivity "
              "than central positions (§II-F)")
 def corners_least_sensitive(probe: SceneProbe) -> Measured:
-    s = _sensitivity_per_mm(probe)
-    corners, centre, edges = s[CORNERS], s[CENTRE], s[EDGE_MIDPOINTS]
-    holds = bool(corners.max() < centre)
-    return Measured(f"aggregate |ΔR/R| per mm: corners {100 * corners.mean():.2f} %, edge midpoints "
-                    f"{100 * edges.mean():.2f} %, centre {100 * centre:.2f} %", holds,
-                    "every corner below P5", {"corner_max": float(corners.max()), "centre": float(centre),
-                                              "edge_mean": float(edges.mean())})
+    s = _by_seed(probe, _sensitivity_per_mm)                # (seeds, points)
+    corners, edges, centre = s[:, CORNERS], s[:, EDGE_MIDPOINTS], s[:, CENTRE]
+    mean = s.mean(axis=0)
+    return judged_over_seeds(f"aggregate |ΔR/R| per mm: corners {mean_sd(100 * corners.mean(axis=1))} %, edge midpoints "
+                             f"{mean_sd(100 * edges.mean(axis=1))} %, centre {mean_sd(100 * centre)} % "
+                             f"({_seeds(probe)}, mean ± sd)", corners.max(axis=1) < centre,
+                             mean[CORNERS].max() < mean[CENTRE], "every corner below P5", probe.seeds,
+                             {"corner_max": float(mean[CORNERS].max()), "corner_mean": float(mean[CORNERS].mean()),
+                              "centre": float(mean[CENTRE]), "edge_mean": float(mean[EDGE_MIDPOINTS].mean()),
+                              "by_seed": {"corner_max": corners.max(axis=1).tolist(), "centre": centre.tolist()}})
 
 
 @observation("rubber12", "5", "The centre (P5) has the widest dynamic range and the highest "
              "signal-to-noise ratio (§II-F)")
 def centre_widest_range(probe: SceneProbe) -> Measured:
-    relative, _ = probe.curves
-    span = np.abs(relative[:, -1] - relative[:, 0]) * probe.rest_ohm        # ohms, (points, channels)
-    best = span.argmax(axis=1)
-    dynamic_range = span.max(axis=1) / probe.rest_ohm[best]
-    readings, _ = probe.repeat_noise
-    noise = readings.std(axis=1, ddof=1)                                     # (points, channels)
-    snr = span[np.arange(len(span)), best] / noise[np.arange(len(span)), best]
-    holds = bool(dynamic_range.argmax() == CENTRE and snr.argmax() == CENTRE)
-    return Measured(f"largest single-channel span 0.3-3 mm: P5 {100 * dynamic_range[CENTRE]:.2f} %, best "
-                    f"P{dynamic_range.argmax() + 1} {100 * dynamic_range.max():.2f} %; SNR P5 {snr[CENTRE]:.0f}, "
-                    f"best P{snr.argmax() + 1} {snr.max():.0f}", holds, "P5 largest of P1-P9 in both",
-                    {"range": dynamic_range.tolist(), "snr": snr.tolist()})
+    def range_and_snr(one):
+        relative, _ = one.curves
+        span = np.abs(relative[:, -1] - relative[:, 0]) * one.rest_ohm        # ohms, (points, channels)
+        best = span.argmax(axis=1)
+        readings, _ = one.repeat_noise
+        noise = readings.std(axis=1, ddof=1)                                     # (points, channels)
+        rows = np.arange(len(span))
+        return span.max(axis=1) / one.rest_ohm[best], span[rows, best] / noise[rows, best]
+    dynamic_range, snr = _by_seed(probe, range_and_snr).transpose(1, 0, 2)     # each (seeds, points)
+    top_range, top_snr = dynamic_range.mean(axis=0).argmax(), snr.mean(axis=0).argmax()
+    at_seed = (dynamic_range.argmax(axis=1) == CENTRE) & (snr.argmax(axis=1) == CENTRE)
+    return judged_over_seeds(
+        f"largest single-channel span 0.3-3 mm: P5 {mean_sd(100 * dynamic_range[:, CENTRE])} %, largest "
+        f"P{top_range + 1} {mean_sd(100 * dynamic_range[:, top_range])} %; SNR P5 {mean_sd(snr[:, CENTRE], 0)}, "
+        f"highest P{top_snr + 1} {mean_sd(snr[:, top_snr], 0)} ({_seeds(probe)}, mean ± sd; largest span at "
+        + "/".join(f"P{i + 1}" for i in dynamic_range.argmax(axis=1)) + ", highest SNR at "
+        + "/".join(f"P{i + 1}" for i in snr.argmax(axis=1)) + ")",
+        at_seed, top_range == CENTRE and top_snr == CENTRE, "P5 largest of P1-P9 in both", probe.seeds,
+        {"range": dynamic_range.mean(axis=0).tolist(), "snr": snr.mean(axis=0).tolist()})
 
 
 @observation("rubber12", "6", "Mirror-image positions give similar patterns; the ambiguity is worst near "
@@ -199,65 +235,66 @@ def mirror_ambiguity_worst_at_edges(probe: SceneProbe) -> Measured:
     # press rows (5 mm from the edge): the reading difference between the two, relative to the
     # press's own signal. Small = ambiguous. Field effects plus electrode contact (the asymmetry
     # the paper names).
-    side, offset, depth = probe.params["side_mm"], 2.5, float(probe.depths_mm[-1])
-    mid = side / 2
-    effects = {**probe.field_effects, **{k: v for k, v in probe.params["effects"].items() if k == "electrode_contact"}}
-    rows = {"centre": mid, "edge": 5.0}
-    ratio = {}
-    for name, across in rows.items():
-        # mirror in x across x = mid at height `across`, and in y across y = mid at abscissa `across`
-        x = np.array([mid - offset, mid + offset, across, across, mid])
-        y = np.array([across, across, mid - offset, mid + offset, across])
-        ohm = probe.scene(effects).simulate(x, y, np.full(5, depth)).channels
-        rest = probe.scene(effects).simulate([mid], [mid], [0.0]).channels[0]
-        signal = np.linalg.norm(ohm[4] / rest - 1)
-        ratio[name] = 0.5 * (np.linalg.norm((ohm[0] - ohm[1]) / rest) + np.linalg.norm((ohm[2] - ohm[3]) / rest)) / signal
-    holds = bool(ratio["edge"] < ratio["centre"])
-    return Measured(f"difference of presses ±2.5 mm across a centreline / press signal: near an edge "
-                    f"midpoint {ratio['edge']:.3f}, at the centre {ratio['centre']:.3f}", holds,
-                    "smaller near the edge midpoint", {"edge": ratio["edge"], "centre": ratio["centre"]})
+    def edge_and_centre(one):
+        side, offset, depth = one.params["side_mm"], 2.5, float(one.depths_mm[-1])
+        mid = side / 2
+        effects = {**one.field_effects, **{k: v for k, v in one.params["effects"].items() if k == "electrode_contact"}}
+        ratio = []
+        for across in (5.0, mid):                      # the edge midpoints' press rows, the centre
+            # mirror in x across x = mid at height `across`, and in y across y = mid at abscissa `across`
+            x = np.array([mid - offset, mid + offset, across, across, mid])
+            y = np.array([across, across, mid - offset, mid + offset, across])
+            ohm = one.scene(effects).simulate(x, y, np.full(5, depth)).channels
+            rest = one.scene(effects).simulate([mid], [mid], [0.0]).channels[0]
+            signal = np.linalg.norm(ohm[4] / rest - 1)
+            ratio.append(0.5 * (np.linalg.norm((ohm[0] - ohm[1]) / rest) + np.linalg.norm((ohm[2] - ohm[3]) / rest)) / signal)
+        return ratio
+    edge, centre = _by_seed(probe, edge_and_centre).T
+    return judged_over_seeds(f"difference of presses ±2.5 mm across a centreline / press signal: near an edge "
+                             f"midpoint {mean_sd(edge, 3)}, at the centre {mean_sd(centre, 3)} ({_seeds(probe)}, "
+                             f"mean ± sd)", edge < centre, edge.mean() < centre.mean(), "smaller near the edge midpoint",
+                             probe.seeds, {"edge": float(edge.mean()), "centre": float(centre.mean()),
+                                           "by_seed": {"edge": edge.tolist(), "centre": centre.tolist()}})
 
 
 @observation("rubber12", "7", "Depth is less observable than x, y, especially at small depths (§III-B)")
 def depth_weak_at_small_depths(probe: SceneProbe) -> Measured:
-    relative, _ = probe.curves
-    response = _aggregate(relative)
-    slope = np.diff(response, axis=1) / np.diff(probe.depths_mm)
-    shallow = float((slope[:, 0] / slope.mean(axis=1)).mean())
-    return Measured(f"slope of the aggregate change at 0.3-0.6 mm = {shallow:.2f} x its mean over "
-                    f"0.3-3.0 mm (mean of P1-P9)", shallow < 1.0, "ratio < 1", {"shallow_ratio": shallow})
+    def shallow_ratio(one):
+        slope = np.diff(_aggregate(one.curves[0]), axis=1) / np.diff(one.depths_mm)
+        return (slope[:, 0] / slope.mean(axis=1)).mean()
+    shallow = _by_seed(probe, shallow_ratio)
+    return judged_over_seeds(f"slope of the aggregate change at 0.3-0.6 mm = {mean_sd(shallow)} x its mean over "
+                             f"0.3-3.0 mm (mean of P1-P9; {_seeds(probe)}, mean ± sd)", shallow < 1.0,
+                             shallow.mean() < 1.0, "ratio < 1", probe.seeds,
+                             {"shallow_ratio": float(shallow.mean()), "by_seed": {"shallow_ratio": shallow.tolist()}})
 
 
 @observation("rubber12", "8", "Pressure shows as an aggregate change over many channels, not in one "
              "channel (§III-B)")
 def pressure_is_aggregate(probe: SceneProbe) -> Measured:
-    relative, _ = probe.curves
-    change = np.abs(relative[:, -1])                                      # (points, channels) at 3 mm
-    effective = (change.sum(axis=1) ** 2 / (change ** 2).sum(axis=1))
-    mean = float(effective.mean())
-    return Measured(f"effective number of channels carrying the change at 3 mm: {mean:.1f} of "
-                    f"{change.shape[1]} (mean of P1-P9)", mean >= 3.0, ">= 3 channels",
-                    {"effective_channels": mean})
+    def effective_channels(one):
+        change = np.abs(one.curves[0][:, -1])                                 # (points, channels) at 3 mm
+        return (change.sum(axis=1) ** 2 / (change ** 2).sum(axis=1)).mean()
+    effective = _by_seed(probe, effective_channels)
+    n_channels = probe.curves[0].shape[-1]
+    return judged_over_seeds(f"effective number of channels carrying the change at 3 mm: {mean_sd(effective, 1)} of "
+                             f"{n_channels} (mean of P1-P9; {_seeds(probe)}, mean ± sd)", effective >= 3.0,
+                             effective.mean() >= 3.0, ">= 3 channels", probe.seeds,
+                             {"effective_channels": float(effective.mean()),
+                              "by_seed": {"effective_channels": effective.tolist()}})
 
 
 @observation("rubber12", "9", "At high force, nonlinearity and partial saturation reduce incremental "
              "sensitivity (§III-B)")
 def saturation_at_high_force(probe: SceneProbe) -> Measured:
-    relative, pressure = probe.curves
-    response = _aggregate(relative)
-    per_pa = np.diff(response, axis=1) / np.diff(pressure, axis=1)
-    middle = per_pa.shape[1] // 2
-    ratio = float((per_pa[:, -1] / per_pa[:, middle]).mean())
-    return Measured(f"d(aggregate change)/d(pressure) at the deepest step = {ratio:.2f} x that at mid "
-                    f"depth (mean of P1-P9)", ratio < 1.0, "ratio < 1", {"ratio": ratio})
-
-
-SPLITS = (0, 1, 2)   # rows 10 and 11: the random hold-out's and the forest's seeds
-
-
-def _mean_sd(values, digits=2) -> str:
-    values = np.asarray(values, dtype=float)
-    return f"{values.mean():.{digits}f} ± {values.std(ddof=1):.{digits}f}"
+    def deepest_over_middle(one):
+        relative, pressure = one.curves
+        per_pa = np.diff(_aggregate(relative), axis=1) / np.diff(pressure, axis=1)
+        return (per_pa[:, -1] / per_pa[:, per_pa.shape[1] // 2]).mean()
+    ratio = _by_seed(probe, deepest_over_middle)
+    return judged_over_seeds(f"d(aggregate change)/d(pressure) at the deepest step = {mean_sd(ratio)} x that at mid "
+                             f"depth (mean of P1-P9; {_seeds(probe)}, mean ± sd)", ratio < 1.0, ratio.mean() < 1.0,
+                             "ratio < 1", probe.seeds, {"ratio": float(ratio.mean()), "by_seed": {"ratio": ratio.tolist()}})
 
 
 @observation("rubber12", "10", "Uncertainty is highest near the boundaries, at shallow depths and at high "
@@ -266,34 +303,37 @@ def uncertainty_pattern(probe: SceneProbe) -> Measured:
     # The paper's uncertainty is the spread of K-fold candidate models plus residual variance;
     # here: the spread across the trees of an extra-trees forest, out of fold (5 random folds,
     # the paper's random hold-out), each target scaled by its standard deviation, averaged;
-    # once per seed of the folds and the forest (SPLITS).
+    # once per seed, which draws the scene, the folds and the forest.
     from sklearn.ensemble import ExtraTreesRegressor
     from sklearn.model_selection import KFold
 
-    table = probe.lab_table
-    features = compute_features(table.channels, FEATURE_GROUPS)
-    targets = table.frame[table.target_columns].to_numpy()
-    scaled = targets / targets.std(axis=0)
-    frame = table.frame
-    centre = np.isclose(frame["x_mm"], probe.params["side_mm"] / 2) & np.isclose(frame["y_mm"], probe.params["side_mm"] / 2)
-    depth = frame["depth_mm"].to_numpy()
-    shallow, middle = depth <= np.quantile(depth, 0.2), (depth > np.quantile(depth, 0.4)) & (depth < np.quantile(depth, 0.6))
-    pressure = frame["pressure_pa"].to_numpy()
-    high, mid_p = pressure >= np.quantile(pressure, 0.8), (pressure > np.quantile(pressure, 0.4)) & (pressure < np.quantile(pressure, 0.6))
-    ratios = {"boundary / centre": [], "shallow / intermediate depth": [], "high / intermediate pressure": []}
-    for seed in SPLITS:
+    def ratios(one):
+        seed, table = one.params["seed"], one.lab_table
+        features = compute_features(table.channels, FEATURE_GROUPS)
+        targets = table.frame[table.target_columns].to_numpy()
+        scaled = targets / targets.std(axis=0)
+        frame = table.frame
+        centre = np.isclose(frame["x_mm"], one.params["side_mm"] / 2) & np.isclose(frame["y_mm"], one.params["side_mm"] / 2)
+        depth, pressure = frame["depth_mm"].to_numpy(), frame["pressure_pa"].to_numpy()
+        shallow = depth <= np.quantile(depth, 0.2)
+        middle = (depth > np.quantile(depth, 0.4)) & (depth < np.quantile(depth, 0.6))
+        high = pressure >= np.quantile(pressure, 0.8)
+        mid_p = (pressure > np.quantile(pressure, 0.4)) & (pressure < np.quantile(pressure, 0.6))
         spread = np.zeros(len(targets))
         for train, test in KFold(5, shuffle=True, random_state=seed).split(features):
             forest = ExtraTreesRegressor(n_estimators=50, random_state=seed, n_jobs=1).fit(features[train], scaled[train])
             per_tree = np.stack([tree.predict(features[test]) for tree in forest.estimators_])
             spread[test] = per_tree.std(axis=0).mean(axis=1)
-        for name, (a, b) in {"boundary / centre": (~centre, centre), "shallow / intermediate depth": (shallow, middle),
-                             "high / intermediate pressure": (high, mid_p)}.items():
-            ratios[name].append(float(spread[a].mean() / spread[b].mean()))
-    return Measured(f"tree spread out of fold (seeds {SPLITS[0]}-{SPLITS[-1]}, mean ± sd): " +
-                    ", ".join(f"{n} {_mean_sd(r)}" for n, r in ratios.items()),
-                    all(np.mean(r) > 1.0 for r in ratios.values()), "every ratio > 1",
-                    {name: float(np.mean(r)) for name, r in ratios.items()})
+        return [spread[a].mean() / spread[b].mean() for a, b in ((~centre, centre), (shallow, middle), (high, mid_p))]
+    names = ("boundary / centre", "shallow / intermediate depth", "high / intermediate pressure")
+    r = _by_seed(probe, ratios)                                 # (seeds, 3)
+    return judged_over_seeds(f"tree spread out of fold ({_seeds(probe)}, mean ± sd): " +
+                             ", ".join(f"{n} {mean_sd(v)}" for n, v in zip(names, r.T)),
+                             (r > 1.0).all(axis=1), bool((r.mean(axis=0) > 1.0).all()), "every ratio > 1", probe.seeds,
+                             {**{n: float(v) for n, v in zip(names, r.mean(axis=0))}, "by_seed": r.tolist()})
+
+
+PAPER_TABLE_II = np.array([0.9466, 0.9762, 0.8516, 0.8670])   # extra trees' test R² x, y, z, P
 
 
 @observation("rubber12", "11", "Test R² of extra trees on a random 15 % hold-out; x notably less accurate "
@@ -302,23 +342,22 @@ def extra_trees_r2(probe: SceneProbe) -> Measured:
     from sklearn.ensemble import ExtraTreesRegressor
     from sklearn.metrics import r2_score
 
-    table = probe.lab_table
-    features = compute_features(table.channels, FEATURE_GROUPS)
-    targets = table.frame[table.target_columns].to_numpy()
-    scores = []
-    for seed in SPLITS:
+    def test_r2(one):
+        seed, table = one.params["seed"], one.lab_table
+        features = compute_features(table.channels, FEATURE_GROUPS)
+        targets = table.frame[table.target_columns].to_numpy()
         test = np.random.default_rng(seed).permutation(len(targets))[: round(0.15 * len(targets))]
         train = np.setdiff1d(np.arange(len(targets)), test)
         forest = ExtraTreesRegressor(n_estimators=100, random_state=seed, n_jobs=1).fit(features[train], targets[train])
-        scores.append(r2_score(targets[test], forest.predict(features[test]), multioutput="raw_values"))
-    r2 = np.mean(scores, axis=0)
-    paper = np.array([0.9466, 0.9762, 0.8516, 0.8670])
-    holds = bool(np.all(np.abs(r2 - paper) <= 0.1))
-    return Measured("R² " + ", ".join(f"{n} {_mean_sd(v, 3)}" for n, v in
-                                      zip(("x", "y", "z", "P"), np.array(scores).T)) +
-                    f" ({len(targets)} lab presses, 100 trees, physics features, {len(SPLITS)} random hold-outs)",
-                    holds, "every target's mean within ±0.10 of the paper",
-                    {"r2": r2.tolist(), "r2_sd": np.std(scores, axis=0, ddof=1).tolist()})
+        return r2_score(targets[test], forest.predict(features[test]), multioutput="raw_values")
+    scores = _by_seed(probe, test_r2)                           # (seeds, targets)
+    r2 = scores.mean(axis=0)
+    return judged_over_seeds("R² " + ", ".join(f"{n} {mean_sd(v, 3)}" for n, v in zip(("x", "y", "z", "P"), scores.T)) +
+                             f" ({len(probe.lab_table.frame)} lab presses, 100 trees, physics features, a random hold-out "
+                             f"per seed, {_seeds(probe)})",
+                             (np.abs(scores - PAPER_TABLE_II) <= 0.1).all(axis=1), bool(np.all(np.abs(r2 - PAPER_TABLE_II) <= 0.1)),
+                             "every target within ±0.10 of the paper", probe.seeds,
+                             {"r2": r2.tolist(), "r2_sd": scores.std(axis=0, ddof=1).tolist(), "by_seed": scores.tolist()})
 
 
 @observation("rubber12", "12", "Extra trees beat the residual network and random forest on validation "
