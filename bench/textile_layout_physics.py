@@ -40,6 +40,11 @@ VARIANTS = {
     "baseline_per_point": ({}, (), {"recording_presses": 6}),
     "physical_per_point": ({**PHYSICAL, "electrode_contact_impedance": {}}, ("contact_resistance", "hysteresis"),
                            {"recording_presses": 6}),
+    "drift_restoring_10": ({"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 10.0}}, (), {}),
+    "drift_restoring_50": ({"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 50.0}}, (), {}),
+    "restoring_per_point": ({"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 10.0}}, (),
+                            {"recording_presses": 6}),
+    "two_point_4n": ({}, (), {"two_point_force_n": 4.0}),
     "ideal": ({}, ("specimen_variation", "electrode_position_error", "foam_spread", "hysteresis", "baseline_drift"), {}),
 }
 
@@ -50,6 +55,8 @@ def main():
     parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
     parser.add_argument("--two-point", action="store_true", help="also run the two-point test")
     parser.add_argument("--two-point-only", action="store_true", help="run the two-point test alone")
+    parser.add_argument("--placement-sd-mm", type=float, default=0.0,
+                        help="two-point test: each indenter placed by hand to this sd per axis (mm)")
     parser.add_argument("--layouts", nargs="+", default=list(LAYOUTS), help="scene configs (default: both of the paper's)")
     parser.add_argument("--kind", default=None, help="reconstruction kind (runs/studies/ert_tests.py RECONSTRUCTIONS; "
                                                      "default: tikhonov)")
@@ -65,14 +72,15 @@ def main():
             if not args.two_point_only:
                 result["single_point"] = single_point_protocol(cfg, tuple(args.seeds), reconstruction=settings or None)
             if args.two_point or args.two_point_only:
-                result["two_point"] = two_point_protocol(cfg, tuple(args.seeds))
+                result["two_point"] = two_point_protocol(cfg, tuple(args.seeds), placement_sd_mm=args.placement_sd_mm)
+                result["placement_sd_mm"] = args.placement_sd_mm
             result.update(seconds=round(time.time() - start, 1), load_average=round(load, 2))
             if args.out:
                 with open(args.out, "a") as handle:
                     handle.write(json.dumps(result) + "\n")
             if args.two_point_only:
                 tp = result["two_point"]
-                print(f"{name:28s} {layout:13s} two-point gradual share {tp['gradual_share']:.2f} "
+                print(f"{name:28s} {layout:13s} placement sd {args.placement_sd_mm:g} mm two-point gradual share {tp['gradual_share']:.2f} "
                       f"{tp['gradual_share_per_seed']}  distances {tp['discrimination_mm']}  "
                       f"[{result['seconds']} s, load {result['load_average']}]", flush=True)
                 continue

@@ -117,12 +117,47 @@ def test_textile_contact_and_viscoelastic_hysteresis_in_the_scene():
     assert np.array_equal(lagged, again)                               # same seed, same result
 
 
+def test_restoring_baseline_drift_stays_bounded_where_the_random_walk_grows():
+    from data.scenes.ert_effects import _walk
+    walk = _walk(np.random.default_rng(0), 2000, 400, 0.0057, None)
+    restoring = _walk(np.random.default_rng(0), 2000, 400, 0.0057, None, restoring_presses=10.0)
+    # both change by the paper's 0.57 % over 50 presses; the walk keeps going, the fabric springs back
+    assert (walk[149] - walk[99]).std() == pytest.approx(0.0057, rel=0.15)
+    assert (restoring[149] - restoring[99]).std() == pytest.approx(0.0057, rel=0.15)
+    assert walk[1999].std() > 5 * 0.0057
+    assert restoring[1999].std() == pytest.approx(0.0057 / np.sqrt(1 - np.exp(-5.0)), rel=0.15)
+    # a new recording's unloaded frame zeroes the drift there too
+    split = _walk(np.random.default_rng(1), 20, 2000, 0.0057, np.repeat([0, 1], 10), restoring_presses=10.0)
+    assert split[10].std() < 0.6 * split[9].std()            # one step from the new frame, against ten
+
+
+def test_restoring_drift_in_the_scene_is_deterministic_and_differs_from_the_walk():
+    contacts = np.tile([[100.0, 100.0, 8.0]], (40, 1))
+    effects = {"contact_resistance": {}, "baseline_drift": {"fraction_per_50_presses": 0.05, "restoring_presses": 5.0}}
+    a, b = scene(effects).simulate(contacts).channels, scene(effects).simulate(contacts).channels
+    assert np.array_equal(a, b)
+    walk = scene({"contact_resistance": {}, "baseline_drift": {"fraction_per_50_presses": 0.05}}).simulate(contacts).channels
+    assert not np.allclose(a, walk)
+
+
+def test_two_point_indenters_placed_by_hand_move_the_readings_not_the_marks():
+    from runs.studies.ert_tests import placed_by_hand
+    two = scene({"contact_resistance": {}, "foam_spread": {}}, protocol="two_point", n_repeats=2, distances_mm=(40,),
+                two_point_locations_mm=((100.0, 100.0),))
+    test = two.generate()
+    moved = placed_by_hand(two, test, 2.0)
+    assert moved.shape == test.channels.shape and not np.allclose(moved, test.channels)
+    assert np.array_equal(moved, placed_by_hand(two, test, 2.0))
+    assert np.allclose(placed_by_hand(two, test, 1e-12), test.channels, atol=1e-9 * np.abs(test.channels).max())
+
+
 @pytest.mark.parametrize("effects", [
     {"textile_contact": {"saturated_fraction": 1.5}},
     {"textile_contact": {"initial_slope_per_n": 0.2}},
     {"contact_resistance": {}, "viscoelastic_hysteresis": {"relaxation_time_s": 0.0}},
     {"contact_resistance": {}, "electrode_contact_impedance": {"resistance_ohm": -1.0}},
     {"contact_resistance": {}, "fabric_anisotropy": {"ratio": -2.0}},
+    {"contact_resistance": {}, "baseline_drift": {"restoring_presses": 0.0}},
 ])
 def test_impossible_parameters_are_one_line_errors(effects):
     with pytest.raises(InputError, match="scene ert: effect"):

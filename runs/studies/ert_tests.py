@@ -31,6 +31,7 @@ from scipy import stats
 
 from common.atomic import atomic_write_text
 from common.errors import InputError
+from data.scenes.contract import random_generator_for
 from models.ert.gauss_newton import GaussNewtonReconstruction
 from models.ert.greit import GreitReconstruction
 from models.ert.learned_inverse import GreitLearnedInverse
@@ -210,8 +211,19 @@ def run_force(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, recons
     return metrics
 
 
+def placed_by_hand(scene, test, sd_mm: float) -> np.ndarray:
+    """The readings of `test` (a two_point recording of `scene`) re-simulated with each indenter off
+    its mark by N(0, sd_mm) per axis, kept on the sheet."""
+    f = test.frame
+    contacts = np.stack([f[["x1_mm", "y1_mm", "force_n"]].to_numpy(), f[["x2_mm", "y2_mm", "force2_n"]].to_numpy()], 1)
+    contacts[:, 0, 2] -= contacts[:, 1, 2]                      # force_n is the total of both
+    rng = random_generator_for(scene.seed, f"session{int(scene.session)}/two_point/placement")
+    contacts[..., :2] = np.clip(contacts[..., :2] + rng.normal(0.0, sd_mm, contacts[..., :2].shape), 0.0, scene.side_mm)
+    return scene.simulate(contacts).channels
+
+
 def run_two_point(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, reconstruction=None, n_repeats=10,
-                  significance=0.05) -> dict:
+                  significance=0.05, placement_sd_mm=0.0) -> dict:
     """Two-point discrimination (the ERT study's §5.2, table 2) with the paired dip test (module docstring)."""
     output_dir = Path(output_dir)
     tables, distances = [], {}
@@ -219,8 +231,10 @@ def run_two_point(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, re
         scene, model = calibrate(cfg, seed, _plain(calibration) or {}, _plain(reconstruction) or {})
         if not isinstance(model, TikhonovReconstruction):
             raise InputError("ert_two_point reads the calibrated pressure field: reconstruction.kind must be tikhonov")
-        test = scene_for(cfg, seed=seed, protocol="two_point", n_repeats=n_repeats).generate()
-        field = model.pressure_field_kpa(test.channels)
+        two_point = scene_for(cfg, seed=seed, protocol="two_point", n_repeats=n_repeats)
+        test = two_point.generate()
+        readings = placed_by_hand(two_point, test, placement_sd_mm) if placement_sd_mm > 0 else test.channels
+        field = model.pressure_field_kpa(readings)
         step = scene.side_mm / field.shape[-1]
         pick = lambda x, y: field[np.arange(len(field)),
                                   np.clip((y / step).astype(int), 0, field.shape[-1] - 1),
