@@ -29,7 +29,7 @@ from sklearn.ensemble import ExtraTreesRegressor  # noqa: E402
 from sklearn.metrics import r2_score  # noqa: E402
 
 from runs.fidelity.observations import (  # noqa: E402
-    CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, run_checks, scene_params)
+    CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, run_checks, scene_params, seeds_label)
 from runs.fidelity.rubber12 import (  # noqa: E402
     SceneProbe,
     centre_widest_range,
@@ -99,8 +99,9 @@ def scene_section(scene: str, args) -> tuple[str, int, int, int]:
     text = (f"## {scene}\n\n`scene={config}`: {held} of {len(rows)} rows hold ({measured} measured; "
             f"{time.perf_counter() - start:.0f} s)\n\n{markdown(rows)}\n")
     if scene == "fingertip":
-        text += "\n### Algorithm 1's cubic at the unseen levels (materials10)\n\n"
-        text += diagnostic_markdown(algorithm1_diagnostic(probe)) + "\n"
+        diagnostic = algorithm1_diagnostic(probe)
+        text += (f"\n### Algorithm 1's cubic at the unseen levels (materials10, {seeds_label(diagnostic['seeds'])}, "
+                 f"mean ± sd)\n\n{diagnostic_markdown(diagnostic)}\n")
     return text, held, measured, len(rows)
 
 
