@@ -18,6 +18,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from runs.fidelity.ert import LAYOUTS, layout_variant, single_point_protocol, two_point_protocol  # noqa: E402
 
 PHYSICAL = {"local_contact": {}, "textile_contact": {}, "viscoelastic_hysteresis": {}}
+RESTORING = {"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 10.0}}   # ert_indentation_*
+PER_POINT = {"recording_presses": 6}          # the unloaded frame before each point's six-force ramp
 # name: (effects added, effects removed, scene overrides[, reconstruction settings])
 VARIANTS = {
     "today": ({}, (), {}),
@@ -37,13 +39,14 @@ VARIANTS = {
     "same_alpha_1e-2": ({}, (), {}, {"alpha_relative": [1.0e-2]}),
     "anisotropy_2_physical": ({**PHYSICAL, "electrode_contact_impedance": {}, "fabric_anisotropy": {"ratio": 2.0}},
                               ("contact_resistance", "hysteresis"), {}),
-    "baseline_per_point": ({}, (), {"recording_presses": 6}),
+    "baseline_per_point": ({}, (), PER_POINT),
     "physical_per_point": ({**PHYSICAL, "electrode_contact_impedance": {}}, ("contact_resistance", "hysteresis"),
-                           {"recording_presses": 6}),
-    "drift_restoring_10": ({"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 10.0}}, (), {}),
+                           PER_POINT),
+    "drift_restoring_10": (RESTORING, (), {}),
     "drift_restoring_50": ({"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 50.0}}, (), {}),
-    "restoring_per_point": ({"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 10.0}}, (),
-                            {"recording_presses": 6}),
+    "restoring_per_point": (RESTORING, (), PER_POINT),
+    "restoring_per_point_anisotropy_2": ({**RESTORING, "fabric_anisotropy": {"ratio": 2.0}}, (), PER_POINT),
+    "restoring_per_point_electrode_error_5mm": ({**RESTORING, "electrode_position_error": {"sd_mm": 5.0}}, (), PER_POINT),
     "two_point_4n": ({}, (), {"two_point_force_n": 4.0}),
     "ideal": ({}, ("specimen_variation", "electrode_position_error", "foam_spread", "hysteresis", "baseline_drift"), {}),
 }

@@ -2,11 +2,18 @@
 import pytest
 
 from runs.fidelity import ert
-from runs.fidelity.observations import CHECKS, scene_params
+from runs.fidelity.observations import CHECKS, CONFIGS, scene_params
 
 
 def probe(*overrides):
-    return ert.ErtProbe(scene_params("ert_internal", overrides))
+    return ert.ErtProbe(scene_params(CONFIGS["ert"], overrides))
+
+
+@pytest.fixture(scope="module")
+def small_grid():
+    """The paper's single-point protocol on a 9 x 9 grid (seeds 0-2, both layouts), run once for
+    the slow rows."""
+    return probe("scene.grid_points_per_side=9")
 
 
 def test_every_row_of_seed_002_is_registered():
@@ -35,6 +42,14 @@ def test_row7_hysteresis_holds():
 
 
 @pytest.mark.slow
-def test_row1_minimum_quantifiable_pressure_does_not_differ_between_layouts():
-    measured = ert.minimum_quantifiable_pressure(probe("scene.grid_points_per_side=9"))
+def test_row1_minimum_quantifiable_pressure_does_not_differ_between_layouts(small_grid):
+    measured = ert.minimum_quantifiable_pressure(small_grid)
     assert measured.holds, measured.value
+
+
+@pytest.mark.slow
+def test_row4_internal_electrodes_estimate_force_better_at_every_seed(small_grid):
+    measured = ert.force_estimation(small_grid)
+    assert measured.holds, measured.value
+    assert all(measured.numbers["at_seed"])
+    assert measured.numbers["r"][0][0] > 0.95                     # the issue's goal on internal electrodes

@@ -10,6 +10,11 @@ every frame above the limit of quantification scored; force error and r at the t
 forces. Rows 6-7 measure the transducer law and the foam's hysteresis
 (data/physics/textile_contact.py); row 5 the SVD-optimal injection.
 
+The rows run on `ert_indentation_internal` and `ert_indentation_boundary`'s physics
+(observations.CONFIGS; the probe swaps in each layout's electrodes): the fabric's baseline shift
+springs back instead of wandering without bound, and the unloaded frame is re-taken before each
+point's ramp (docs/ert.md "Boundary vs internal: which physics" says why and what each changes).
+
 `layout_variant` builds the configuration of one physics variant (effects added to or removed
 from the scenes' lists); bench/textile_layout_physics.py measures the variants of docs/ert.md's
 "Boundary vs internal: which physics" with it.
@@ -73,12 +78,14 @@ def single_point_protocol(cfg, seeds=(0, 1, 2), ramp_forces_n=RAMP_FORCES_N, ref
     return summary
 
 
-def two_point_protocol(cfg, seeds=(0, 1, 2), n_repeats=10) -> dict:
-    """The two-point test of runs/studies/ert_tests.py: p-values per seed, location and distance,
+def two_point_protocol(cfg, seeds=(0, 1, 2), n_repeats=10, placement_sd_mm=0.0) -> dict:
+    """The two-point test of runs/studies/ert_tests.py (indenters placed by hand to
+    `placement_sd_mm` per axis): p-values per seed, location and distance,
     the discrimination distances, and how gradual the p-values are: the share of them between
     0.01 and 0.9 (the paper's table 2: 18 of 27 internal, 26 of 27 boundary)."""
     with tempfile.TemporaryDirectory() as folder:
-        metrics = run_two_point(cfg, folder, logging.getLogger(__name__), seeds, None, None, n_repeats)
+        metrics = run_two_point(cfg, folder, logging.getLogger(__name__), seeds, None, None, n_repeats,
+                                placement_sd_mm=placement_sd_mm)
         table = pd.read_csv(f"{folder}/two_point.csv")
     gradual = table.p.between(0.01, 0.9)
     return {"discrimination_mm": metrics["discrimination_mm_per_location"], "p_table_seed0": metrics["p_table_seed0"],
@@ -93,7 +100,7 @@ def _fmt(pair, digits=2):
 @probe("ert")
 class ErtProbe:
     """The measurements the rows share, each run once: the paper's tests on both layouts. `params`:
-    the composed scene config (bench/fidelity.py passes ert_internal's with its overrides); both
+    the composed scene config (bench/fidelity.py passes CONFIGS["ert"]'s with its overrides); both
     layouts take it with their own electrodes. `repeats`: two-point presses per location and
     distance."""
 
@@ -137,8 +144,8 @@ def localisation_ratio(probe: ErtProbe) -> Measured:
     internal, boundary = result["ert_internal"]["localisation_mm"], result["ert_boundary"]["localisation_mm"]
     ratio = internal[0] / boundary[0]
     return Measured(f"internal {_fmt(internal)} vs boundary {_fmt(boundary)} mm (sd over seeds; frames above the "
-                    f"limit of quantification along a {RAMP_FORCES_N[0]:g}-{RAMP_FORCES_N[-1]:g} N ramp), "
-                    f"ratio {ratio:.2f}", holds=bool(ratio <= 0.5), tolerance="ratio <= 0.5 (internal at most half)",
+                    f"limit of quantification along a {RAMP_FORCES_N[0]:g}-{RAMP_FORCES_N[-1]:g} N ramp; "
+                    f"{_reference_frame(probe)}), ratio {ratio:.2f}", holds=bool(ratio <= 0.5), tolerance="ratio <= 0.5 (internal at most half)",
                     numbers={"internal": internal, "boundary": boundary, "ratio": ratio})
 
 
@@ -164,13 +171,29 @@ def two_point(probe: ErtProbe) -> Measured:
 def force_estimation(probe: ErtProbe) -> Measured:
     result = probe.single_point
     internal, boundary = result["ert_internal"], result["ert_boundary"]
-    holds = internal["force_error_n"][0] < boundary["force_error_n"][0] and internal["force_r"][0] > boundary["force_r"][0]
+    better = lambda a, b: a["force_error_n"][0] < b["force_error_n"][0] and a["force_r"][0] > b["force_r"][0]
+    at_seed = [r["force_error_n"] < q["force_error_n"] and r["force_r"] > q["force_r"]
+               for r, q in zip(internal["per_seed"], boundary["per_seed"])]
+    holds = better(internal, boundary) and all(at_seed)
     return Measured(f"|error| internal {_fmt(internal['force_error_n'])} vs boundary {_fmt(boundary['force_error_n'])} N; "
-                    f"r {internal['force_r'][0]:.3f} vs {boundary['force_r'][0]:.3f} (at "
-                    f"{', '.join(f'{f:g}' for f in REFERENCE_FORCES_N)} N)", holds=bool(holds),
-                    tolerance="internal lower error and higher r",
+                    f"r {_fmt(internal['force_r'], 3)} vs {_fmt(boundary['force_r'], 3)} (at "
+                    f"{', '.join(f'{f:g}' for f in REFERENCE_FORCES_N)} N; {_reference_frame(probe)}); both better "
+                    f"at {sum(at_seed)} of {len(at_seed)} seeds", holds=bool(holds),
+                    tolerance="internal lower error and higher r, on the mean and at every seed",
                     numbers={"internal": internal["force_error_n"], "boundary": boundary["force_error_n"],
-                             "r": [internal["force_r"], boundary["force_r"]]})
+                             "r": [internal["force_r"], boundary["force_r"]], "at_seed": at_seed})
+
+
+def _drift_kind(probe: ErtProbe) -> str:
+    drift = probe.params["effects"].get("baseline_drift") or {}
+    return (f", springing back over {drift['restoring_presses']:g} presses" if drift.get("restoring_presses")
+            else ", a random walk that keeps growing")
+
+
+def _reference_frame(probe: ErtProbe) -> str:
+    """When the unloaded frame is taken, in words."""
+    every = probe.params.get("recording_presses")
+    return f"unloaded frame re-taken every {every} presses" if every else "one unloaded frame per recording"
 
 
 @observation("ert", "5", "SVD-optimal pairwise injection: 94 of 276 pairs within 8 iterations",
@@ -212,7 +235,8 @@ def hysteresis(probe: ErtProbe) -> Measured:
     mean, sd = 100 * values.mean(), 100 * values.std(ddof=1)
     return Measured(f"standard linear solid + textile_contact: {mean:.1f} ± {sd:.1f} % over "
                     f"{', '.join(f'{f:g}' for f in textile_contact.FREQUENCIES_HZ)} Hz (15 N peak); the baseline shift "
-                    f"is the fed-in baseline_drift, not produced by the solid",
+                    f"is not produced by the solid: baseline_drift gives 0.57 % over 50 presses by construction"
+                    f"{_drift_kind(probe)}",
                     holds=bool(abs(mean - 8.3) < 1.0 and sd < 4.7 + 1e-9),
                     tolerance="mean within 1 point, sd over frequencies within the paper's sd (which spans specimens too)",
                     numbers={"per_frequency": values.tolist()})
