@@ -145,7 +145,7 @@ def patch_loads_n(contacts: np.ndarray, side_mm: float, patch_mm: float, radius_
             iy = np.clip((py / patch_mm).astype(int), 0, n_side - 1)
             wx = np.eye(n_side)[ix]
             wy = np.eye(n_side)[iy]
-        share = np.einsum("nsy,nsx->nyx", wy, wx).reshape(len(contacts), -1)
+        share = (np.swapaxes(wy, 1, 2) @ wx).reshape(len(contacts), -1)     # sum over samples of wy wx
         share /= np.maximum(share.sum(axis=1, keepdims=True), 1e-300)
         share[share < 1e-3] = 0.0
         share /= np.maximum(share.sum(axis=1, keepdims=True), 1e-300)
@@ -306,8 +306,13 @@ class ERTScene:
     def transfer_resistance(self, contacts: np.ndarray, sensor=None) -> np.ndarray:
         """(n_presses, n_electrodes, n_electrodes) transfer resistances for (n, n_contacts, 3)
         contacts through the listed press effects (no reading effects)."""
-        effects = resolve_effects(self.name, self.effects, EFFECTS)
         sensor = self.sensor() if sensor is None else sensor
+        return self._solver(sensor).transfer_resistance(self.node_conductance_s(contacts, sensor), chunk=128)
+
+    def node_conductance_s(self, contacts: np.ndarray, sensor) -> np.ndarray:
+        """(n_presses, n_nodes) sheet conductance of every grid node (siemens per square) under
+        (n, n_contacts, 3) contacts, through the listed press effects."""
+        effects = resolve_effects(self.name, self.effects, EFFECTS)
         solver = self._solver(sensor)
         node_patch = patch_weights(solver.solver.grid.node_xy_mm, self.side_mm, self.patch_mm)
         base_nodes = solver._base_nodes
@@ -336,8 +341,7 @@ class ERTScene:
                 else:
                     fn(press, **params)
         factor = press["patch_conductance_factor"]
-        node_conductance = base_nodes[None, :] * (factor if press["local"] else factor @ node_patch.T)
-        return solver.transfer_resistance(node_conductance, chunk=128, group_by_size=True)
+        return base_nodes[None, :] * (factor if press["local"] else factor @ node_patch.T)
 
     def patch_jacobian(self, sensor) -> np.ndarray:
         """(n_channels, n_patches) d voltage / d (relative patch conductance) of the sensor unloaded."""
