@@ -10,7 +10,7 @@ normalised from raw readings (scene rubber12_lab's min-max step), `normalisation
 so a model trained on them can be deployed on the raw readings.
 
 Whoever builds a SensorTable (a scene, a user's file), its channels and targets are checked on
-construction (data/readers/table_reader.py: check_model_values): finite, finite in float32, and within the
+construction (data/readers/table_reader.py: check_model_block): finite, finite in float32, and within the
 physical range of the unit each name carries; at least one channel and one target.
 
 A table whose one target is a class label (a classification table) holds the label's class
@@ -33,7 +33,7 @@ import pandas as pd
 
 from common.errors import InputError
 from data.preprocessing.minmax_scaling import MinMaxScaling
-from data.readers.table_reader import check_columns_exist, check_model_values, numeric_column, read_table_file, where
+from data.readers.table_reader import check_columns_exist, check_model_block, numeric_column, read_table_file, where
 from data.splits.indices import split_values
 from data.units import UNITS, unit_of
 
@@ -61,8 +61,7 @@ class SensorTable:
             if not columns:
                 raise InputError(f"{source}: no {what} columns (data.{what}_columns is empty)")
             check_columns_exist(self.frame, columns, what, source)
-            for column in columns:
-                check_model_values(self.frame[column].to_numpy(dtype=np.float64), column, what, source)
+            check_model_block(self.frame, columns, what, source)
 
     @property
     def source_name(self) -> str:

@@ -1,13 +1,17 @@
 """The ERT scene's fast forward paths equal the plain computations to rounding: the patch solver
 (Woodbury update with eliminated 3 x 3 cells, data/physics/sheet_conduction.py) against a full
 sparse solve per press, on the scenes' own presses (both electrode layouts, patch-wide and
-local contact), and the four-terminal readings against the superposition formula term by term."""
+local contact), the four-terminal readings against the superposition formula term by term, and
+SensorTable's one-pass check of its values against the column-by-column one it stands for."""
 import numpy as np
+import pandas as pd
 import pytest
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
+from common.errors import InputError
 from data.physics.sheet_conduction import PatchUpdateSolver, SheetGrid, SheetSolver, four_terminal_voltage_v
+from data.readers.table_reader import check_model_block, check_model_values
 from data.scenes.ert import injection_pairs, measurement_pairs, patch_weights
 
 
@@ -70,3 +74,16 @@ def test_four_terminal_readings_equal_the_superposition_formula_for_every_pair()
                 expected = 2e-3 * (z[n, c, a] - z[n, c, b] - z[n, d, a] + z[n, d, b])
                 assert v[n, k, i] == pytest.approx(expected, rel=1e-12, abs=1e-15)
     np.testing.assert_array_equal(four_terminal_voltage_v(z[1], inj, meas, 2e-3), v[1])
+
+
+@pytest.mark.parametrize("column, value", [("b_v", np.nan), ("c_kpa", -1.0), ("a_v", 1e39), ("c_kpa", np.inf)])
+def test_the_block_check_of_a_tables_values_names_the_first_bad_column_and_row(column, value):
+    frame = pd.DataFrame({"a_v": [0.1, 0.2, 0.3], "b_v": [1.0, 2.0, 3.0], "c_kpa": [5.0, 6.0, 7.0]})
+    frame.loc[1, column] = value
+    with pytest.raises(InputError) as block:
+        check_model_block(frame, list(frame.columns), "channel", "rig.csv")
+    with pytest.raises(InputError) as one_by_one:
+        for name in frame.columns:
+            check_model_values(frame[name].to_numpy(dtype=np.float64), name, "channel", "rig.csv")
+    assert str(block.value) == str(one_by_one.value) and f"'{column}'" in str(block.value) and "line 3" in str(block.value)
+    check_model_block(frame.drop(index=1), list(frame.columns), "channel", "rig.csv")    # the rest passes

@@ -15,7 +15,7 @@ import pandas as pd
 
 from common.errors import InputError
 from common.progress import progress
-from data.units import first_outside
+from data.units import first_outside, physical_range
 
 # The torch nets and the exported ONNX graph compute in float32, and scikit-learn's trees cast
 # their inputs to float32 too: a value must survive that cast.
@@ -99,6 +99,25 @@ def numeric_column(raw: pd.Series, column: str, what: str, source: str, hint: st
         raise InputError(f"{source}: {what} column '{column}' has a non-numeric value "
                          f"{raw.iloc[row]!r} in {where(source, row)}{hint}")
     return values.to_numpy(dtype=np.float64, na_value=np.nan)
+
+
+def check_model_block(frame: pd.DataFrame, columns: list[str], what: str, source: str) -> None:
+    """check_model_values on every column, in one pass over the block when all of them hold (a
+    scene's table has thousands of channel columns): each column's minimum and maximum decide it
+    (NaN propagates into both); only a table that fails is checked column by column, for the
+    same first error."""
+    try:
+        values = frame[columns].to_numpy(dtype=np.float64)
+    except (TypeError, ValueError):                    # not numbers: the column-by-column error
+        values = np.empty((0, 0))
+    if values.shape[1:] == (len(columns),) and len(values):
+        rules = [physical_range(column) for column in columns]
+        low = np.array([-MODEL_DTYPE_MAX if r is None else max(r.low, -MODEL_DTYPE_MAX) for r in rules])
+        high = np.array([MODEL_DTYPE_MAX if r is None else min(r.high, MODEL_DTYPE_MAX) for r in rules])
+        if (values.min(axis=0) >= low).all() and (values.max(axis=0) <= high).all():
+            return
+    for column in columns:
+        check_model_values(frame[column].to_numpy(dtype=np.float64), column, what, source)
 
 
 def check_model_values(values: np.ndarray, column: str, what: str, source: str) -> None:
