@@ -1,6 +1,7 @@
 """Touchstone's classifiers against aeon's ROCKET family on the UCR/UEA sets inside aeon's wheel.
 
-    .venv/bin/python bench/tsc_peers.py --quick            # 3 small sets, the ROCKET family and the default (< 10 min)
+    .venv/bin/python bench/tsc_peers.py --quick            # GunPoint, BasicMotions, seed 0: aeon's MiniRocket
+                                                           # and MultiRocket-Hydra, the default (< 10 min)
     .venv/bin/python bench/tsc_peers.py                    # every set and method (about 3 h on 2 cores)
     .venv/bin/python bench/tsc_peers.py --sets GunPoint --methods aeon:minirocket prcnn --seeds 0 1 2
     .venv/bin/python bench/tsc_peers.py --report           # the table and figure from the results so far
@@ -55,7 +56,9 @@ PEER_REQUIREMENTS = ROOT / "bench" / "requirements-aeon.txt"
 PEER_SCRIPT = ROOT / "bench" / "tsc_peers_aeon.py"
 SETS = ("ACSF1", "ArrowHead", "BasicMotions", "GunPoint", "ItalyPowerDemand", "OSULeaf", "JapaneseVowels_eq",
         "PickupGestureWiimoteZ_eq")
-QUICK_SETS = ("GunPoint", "ItalyPowerDemand", "BasicMotions")
+QUICK_SETS = ("GunPoint", "BasicMotions")   # one channel and six
+QUICK_METHODS = ("aeon:minirocket", "aeon:multirocket_hydra", "default")
+QUICK_SEEDS = (0,)
 AEON_METHODS = ("aeon:minirocket", "aeon:multirocket_hydra", "aeon:quant")
 NETS = ("prcnn", "rescnn", "inceptiontime", "lstm_fcn")
 DEFAULT = "default"   # train.py with no model=
@@ -169,6 +172,8 @@ def run_touchstone(path: Path, method: str, seed: int, run_dir: Path, limit_s: f
     return {"seed": seed, "accuracy": metrics["test"]["accuracy"], "fit_s": metrics["fit_time_s"],
             "latency_ms": None if latency is None else latency / 1e3, "wall_s": wall, "model": metrics.get("model"),
             "chosen": metrics.get("choice", {}).get("chosen"), "reason": metrics.get("choice", {}).get("reason"),
+            "scored_on": metrics.get("choice", {}).get("scored_on"),
+            "skipped": list(metrics.get("choice", {}).get("skipped", {})),
             "best_epoch": training.get("best_epoch"), "fold_best_epochs": training.get("fold_best_epochs"),
             "load": load}
 
@@ -196,8 +201,10 @@ def summary(rows: list[dict]) -> dict:
         if "error" in r:
             cell["errors"].append(r["error"])
             continue
-        if r.get("chosen"):    # what the default chose
-            cell["notes"].append(r["chosen"] if isinstance(r["chosen"], str) else r["chosen"].get("chosen", "?"))
+        if r.get("chosen"):    # what the default chose, on what, and what the budget skipped
+            scored = r.get("scored_on") or {}
+            on = {"validation": "validation"}.get(scored.get("rows"), "held out")
+            cell["notes"].append(f"{r['chosen']} ({on}, {scored['n']})" if scored else r["chosen"])
         elif r.get("best_epoch") is not None:   # the epochs a net was refitted for
             cell["notes"].append(f"{r['best_epoch']} epochs")
         for key in ("accuracy", "fit_s", "latency_ms", "latency_bulk_ms", "load"):
@@ -268,11 +275,11 @@ def pareto_figure(rows: list[dict], path: Path) -> str:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--quick", action="store_true", help=f"sets {', '.join(QUICK_SETS)}; aeon, the ROCKET "
-                        "family and the default (no nets)")
+    parser.add_argument("--quick", action="store_true", help=f"sets {', '.join(QUICK_SETS)}, methods "
+                        f"{', '.join(QUICK_METHODS)}, seed 0 (a smoke run, not a result: one seed)")
     parser.add_argument("--sets", nargs="+", choices=SETS)
     parser.add_argument("--methods", nargs="+", help="aeon:minirocket, ..., a model name, or default")
-    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    parser.add_argument("--seeds", nargs="+", type=int)
     parser.add_argument("--out", type=Path, default=ROOT / "bench" / "results" / "tsc_peers")
     parser.add_argument("--report", action="store_true", help="run nothing: the table and figure from --out's results")
     parser.add_argument("--net-limit-min", type=float, default=NET_LIMIT_S / 60,
@@ -283,7 +290,8 @@ def main() -> None:
         rows = read_results(args.out / "results.jsonl")
         return report(rows, args.out, [r for r in rows if r["set"] in args.sets] if args.sets else rows)
     sets = args.sets or (QUICK_SETS if args.quick else SETS)
-    methods = args.methods or [*AEON_METHODS, *rocket_models(), DEFAULT, *([] if args.quick else NETS)]
+    methods = args.methods or (list(QUICK_METHODS) if args.quick else [*AEON_METHODS, *rocket_models(), DEFAULT, *NETS])
+    args.seeds = args.seeds or list(QUICK_SEEDS if args.quick else (0, 1, 2))
     python = peer_python() if any(m.startswith("aeon:") for m in methods) or not (args.out / "sets").exists() else None
     if python is None and not all((args.out / "sets" / f"{s}.npz").exists() for s in sets):
         python = peer_python()

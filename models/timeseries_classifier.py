@@ -25,8 +25,10 @@ epochs, and refits on every training window for that many epochs: the epoch coun
 training recording instead of a small set's 8-10 validation recordings, the model is fitted on all
 of them, and the validation split stays untouched for reporting and for choosing between models.
 The folds' held-out predictions (`out_of_fold_proba_`, each training window predicted by a fit
-that never saw its recording) are kept; a run whose validation side is empty (every class has one
-training recording) reports them as its validation scores.
+that never saw its recording; `out_of_fold_method_` says how) are kept: a run whose validation side
+is empty (every class has one training recording) reports them as its validation scores, and the
+default model's choice scores the net on them when it trains on every training recording
+(models/validation_choice.py).
 
 `ensemble_size` > 1 trains that many networks with seeds seed, seed+1, ... (InceptionTime's
 paper: 5) and averages their class probabilities (models/nets/member_average.py), one module,
@@ -292,6 +294,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                         member_callback(epoch_callback, f"fold{k}"), int(self.max_epochs))
             self.out_of_fold_proba_[held_rows] = fold.predict_proba(X[held_rows])
             self.fold_best_epochs_.append(fold.best_epoch_)
+        self.out_of_fold_method_ = f"{len(self.fold_best_epochs_)} stratified folds"
         epochs = max(1, int(np.ceil(np.median(self.fold_best_epochs_))))
         log.info("epochs chosen on %d stratified folds: best epochs %s, median %d; refitting on all %d windows",
                  len(self.fold_best_epochs_), self.fold_best_epochs_, epochs, len(X))
@@ -319,6 +322,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         if self.epoch_selection == "folds":
             self.out_of_fold_proba_ = np.mean([member.out_of_fold_proba_ for member in members], axis=0)
             self.fold_best_epochs_ = [member.fold_best_epochs_ for member in members]
+            self.out_of_fold_method_ = f"{members[0].out_of_fold_method_}, {len(members)} members averaged"
         self.n_features_in_ = X.shape[1]
         return self
 

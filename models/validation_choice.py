@@ -26,6 +26,17 @@ on these very validation rows, so its loss there is optimistic and would win eve
 GunPoint, seeds 0-2: PR-CNN and ResCNN both at validation accuracy 1.0, ResCNN taken on its lower
 loss, test accuracy 0.956 ± 0.037). The log loss is still reported.
 
+What the candidates are scored on (`score_on`): `validation` (and `auto`, which a run may resolve to
+`training`), the validation rows given to `fit` (or carved from the training rows when none are); `training`, every candidate fitted on all the
+training rows and scored on its own held-out predictions of them (`out_of_fold_proba_`: the ROCKET
+family's exact leave-one-out, a net's out-of-fold predictions from the stratified folds that choose
+its epoch count), so that the winner is already trained on every row and no rows are spent on
+choosing (classes only). The run asks for it where the validation recordings would otherwise be
+carved from the training recordings a file declares (runs/classification.py): on ArrowHead's 36
+training recordings the validation carve left 28 to train on and 8 to choose with. Every candidate
+is scored on the same rows, paired, as above; `scored_on_` (and metrics.json `choice.scored_on`)
+says which rows, how many, and how each candidate held them out.
+
 `candidates` is either {name: estimator} or {task: {name: estimator}} with task one of TASKS;
 the second form (configs/model/auto.yaml) lets one config serve every kind of data, and `task`
 (set by the run; "auto" reads it from the data: 3-D X is recordings, integer y a class label)
@@ -46,6 +57,7 @@ from models.epoch_callback import member_callback
 
 log = logging.getLogger(__name__)
 TASKS = ("regression", "classification", "recordings")
+SCORE_ON = ("auto", "validation", "training")
 ENSEMBLE = "ensemble"
 
 
@@ -65,8 +77,9 @@ def _fit_kwargs(estimator, **kwargs) -> dict:
 
 class ValidationChoice(BaseEstimator):
     def __init__(self, candidates=None, task="auto", budget_s=None, relative_cost=None, ensemble=True,
-                 val_fraction=0.15, significance_z=1.96, seed=0):
+                 val_fraction=0.15, significance_z=1.96, seed=0, score_on="auto"):
         self.candidates = candidates
+        self.score_on = score_on
         self.task = task
         self.significance_z = significance_z
         self.budget_s = budget_s
@@ -104,6 +117,8 @@ class ValidationChoice(BaseEstimator):
                 raise InputError(f"model.relative_cost.{name} must be a positive number, got {cost!r}")
         if not (isinstance(self.significance_z, (int, float)) and self.significance_z >= 0):
             raise InputError(f"model.significance_z must be a number >= 0, got {self.significance_z!r}")
+        if self.score_on not in SCORE_ON:
+            raise InputError(f"model.score_on must be one of {', '.join(SCORE_ON)}, got {self.score_on!r}")
 
     def _score(self, y_val, output) -> tuple:
         """A sortable score, higher is better, and its readable form."""
@@ -115,13 +130,23 @@ class ValidationChoice(BaseEstimator):
         loss = float(log_loss(y_val, np.clip(output, 1e-15, 1), labels=self.classes_))
         return (accuracy,), {"accuracy": accuracy, "loss": loss}
 
-    def _output(self, model, X):
-        """What a candidate is scored on: predictions (regression) or class probabilities."""
+    def _output(self, model, X=None):
+        """What a candidate is scored on: predictions (regression) or class probabilities, of X, or
+        (X None) its held-out predictions of its own training rows."""
         if self.task_ == "regression":
             return np.asarray(model.predict(X), dtype=np.float64)
-        proba = np.zeros((len(X), len(self.classes_)))
-        proba[:, np.searchsorted(self.classes_, model.classes_)] = model.predict_proba(X)
+        given = model.predict_proba(X) if X is not None else model.out_of_fold_proba_
+        proba = np.zeros((len(given), len(self.classes_)))
+        proba[:, np.searchsorted(self.classes_, model.classes_)] = given
         return proba / proba.sum(axis=1, keepdims=True)   # a float32 net's rows sum to 1 only up to rounding
+
+    def _held_out(self, name, model):
+        """A candidate's held-out predictions of its training rows (score_on=training)."""
+        if getattr(model, "out_of_fold_proba_", None) is None:
+            raise InputError(f"model.score_on=training: candidate {name} gives no held-out predictions of its "
+                             "training rows (out_of_fold_proba_); a net needs trainer.epoch_selection=folds")
+        self.scored_on_["by"][name] = model.out_of_fold_method_
+        return self._output(model)
 
     def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
         self._check_params()
@@ -129,13 +154,25 @@ class ValidationChoice(BaseEstimator):
         if self.task_ not in TASKS:
             raise InputError(f"model.task must be auto or one of {', '.join(TASKS)}, got '{self.task}'")
         candidates = self.candidate_set(self.task_)
-        if X_val is None or y_val is None:
+        on_training = self.score_on == "training"
+        if on_training:
+            if self.task_ == "regression":
+                raise InputError("model.score_on=training scores held-out class predictions; regression "
+                                 "chooses on validation rows (model.score_on=validation)")
+            if X_val is not None:
+                raise InputError("model.score_on=training fits every candidate on all training rows; "
+                                 "validation rows would go unused (pool them with the training rows)")
+            self.scored_on_ = {"rows": "training, held out", "n": len(y), "by": {}}
+        elif X_val is None or y_val is None:
             fit_rows, val_rows = carve_validation(len(X), self.val_fraction, self.seed, groups)
             X, y, X_val, y_val = X[fit_rows], y[fit_rows], X[val_rows], y[val_rows]
             groups = None if groups is None else np.asarray(groups)[fit_rows]
+        if not on_training:
+            self.scored_on_ = {"rows": "validation", "n": len(y_val)}
+        y_scored = np.asarray(y) if on_training else y_val    # the rows every candidate is scored on, paired
         if self.task_ != "regression":
-            self.classes_ = np.unique(np.concatenate([np.asarray(y), np.asarray(y_val)]))
-            self.majority_accuracy_ = float(np.unique(y_val, return_counts=True)[1].max() / len(y_val))
+            self.classes_ = np.unique(np.concatenate([np.asarray(y), np.asarray(y_scored)]))
+            self.majority_accuracy_ = float(np.unique(y_scored, return_counts=True)[1].max() / len(y_scored))
         costs = {name: float((self.relative_cost or {}).get(name, 1.0)) for name in candidates}
         order = sorted(candidates, key=lambda name: costs[name])   # stable: ties keep the listed order
         self.models_, self.scores_, self.fit_time_s_, self.skipped_ = {}, {}, {}, {}
@@ -157,19 +194,20 @@ class ValidationChoice(BaseEstimator):
                 epoch_callback=member_callback(epoch_callback, name) if epoch_callback else None))
             self.fit_time_s_[name] = time.perf_counter() - began
             spent_per_cost.append(self.fit_time_s_[name] / costs[name])
-            outputs[name] = self._output(model, X_val)
-            ranks[name], self.scores_[name] = self._score(y_val, outputs[name])
+            outputs[name] = self._held_out(name, model) if on_training else self._output(model, X_val)
+            ranks[name], self.scores_[name] = self._score(y_scored, outputs[name])
             self.models_[name] = model
-            log.info("model choice: %s fitted in %.1f s, validation %s", name, self.fit_time_s_[name],
+            log.info("model choice: %s fitted in %.1f s, %s %s", name, self.fit_time_s_[name],
+                     "held-out" if on_training else "validation",
                      ", ".join(f"{k} {v:.4f}" for k, v in self.scores_[name].items()))
         best = (max(ranks, key=lambda name: ranks[name]) if self.task_ == "regression"   # max keeps the first (cheapest) of equals
-                else self._significantly_best(outputs, y_val))
+                else self._significantly_best(outputs, y_scored))
         self.ensemble_weights_ = None
         if self.ensemble and len(self.models_) > 1:
             weights = self._ensemble_weights()
             if weights is not None:
                 mixed = sum(w * outputs[name] for name, w in weights.items())
-                rank, self.scores_[ENSEMBLE] = self._score(y_val, mixed)
+                rank, self.scores_[ENSEMBLE] = self._score(y_scored, mixed)
                 if rank > ranks[best]:
                     best, self.ensemble_weights_ = ENSEMBLE, weights
         self.chosen_ = best
@@ -208,10 +246,17 @@ class ValidationChoice(BaseEstimator):
         metric = "R^2" if self.task_ == "regression" else "accuracy"
         key = "r2" if self.task_ == "regression" else "accuracy"
         shown = ", ".join(f"{n} {s[key]:.4f}" for n, s in self.scores_.items())
-        text = f"chose {self.chosen_} on validation {metric} ({shown})"
+        rows = "validation"
+        if self.score_on == "training":
+            how = "; ".join(f"{n} {m}" for n, m in self.scored_on_["by"].items())
+            rows = "held-out training"
+            text = (f"chose {self.chosen_} on held-out {metric} over all {self.scored_on_['n']} training rows, "
+                    f"each predicted by a fit without it ({how}), trained on all of them ({shown})")
+        else:
+            text = f"chose {self.chosen_} on validation {metric} over {self.scored_on_['n']} rows ({shown})"
         top = max((n for n in self.models_), key=lambda n: self.scores_[n][key])
         if self.task_ != "regression" and self.scores_[top][key] > self.scores_[self.chosen_][key]:
-            text += (f"; {top} is right on more validation rows but not significantly more "
+            text += (f"; {top} is right on more {rows} rows but not significantly more "
                      f"(McNemar z <= {self.significance_z:g}), so the cheaper one stays")
         if self.skipped_:
             text += f"; skipped for the budget: {', '.join(self.skipped_)}"
@@ -240,5 +285,5 @@ class ValidationChoice(BaseEstimator):
         """What metrics.json says of the choice."""
         check_is_fitted(self, "chosen_")
         return {"task": self.task_, "chosen": self.chosen_, "reason": self.reason_, "budget_s": self.budget_s,
-                "validation": self.scores_, "fit_time_s": self.fit_time_s_, "skipped": self.skipped_,
+                "scored_on": self.scored_on_, "validation": self.scores_, "fit_time_s": self.fit_time_s_, "skipped": self.skipped_,
                 "ensemble_weights": self.ensemble_weights_}

@@ -124,6 +124,17 @@ def _recording_groups(model, datamodule) -> dict:
     return {"groups": datamodule.train_window_recording}
 
 
+def _scores_on_training(choice: ValidationChoice, datamodule) -> bool:
+    """Whether the default model trains its candidates on every training recording and scores them on
+    their held-out predictions (model.score_on=auto: where the validation recordings were carved from
+    the training recordings the file declares, and each window is a whole recording's own or keeps
+    its recording)."""
+    if choice.score_on != "auto":
+        return choice.score_on == "training"
+    return (getattr(datamodule, "validation_carved", False) and len(datamodule.y_val) > 0
+            and len(datamodule.train_window_recording) == len(datamodule.y_train))
+
+
 def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> ClassificationResult:
     (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     summary = datamodule.summary()
@@ -136,10 +147,24 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
     else:
         model = instantiate(cfg.model)
     choice = model if isinstance(model, ValidationChoice) else None   # model=auto: chosen on validation
+    # The rows the model is fitted on; with the choice scored on held-out training predictions, the
+    # carved validation recordings join them (each candidate then holds rows out itself).
+    X_fit, y_fit = X_train, y_train
+    fit_recordings = getattr(datamodule, "train_window_recording", None)
+    fit_levels = getattr(datamodule, "train_levels_per_window", None)
+    pooled = False
     if choice is not None:
         chosen(choice.set_params(task="classification" if table else "recordings"))
+        pooled = not table and _scores_on_training(choice, datamodule)
+        choice.set_params(score_on="training" if pooled else "validation")
         if not table:
             choice.set_candidate_params(modalities=datamodule.modality_channels)
+        if pooled:   # a net's held-out predictions are those of the folds that choose its epochs
+            choice.set_candidate_params(epoch_selection="folds")
+            X_fit, y_fit = np.concatenate([X_train, X_val]), np.concatenate([y_train, y_val])
+            fit_recordings = np.concatenate([fit_recordings, datamodule.val_window_recording])
+            if fit_levels is not None and datamodule.val_levels_per_window is not None:
+                fit_levels = np.concatenate([fit_levels, datamodule.val_levels_per_window])
     if "modalities" in model.get_params():
         model.set_params(modalities=datamodule.modality_channels)
     if "checkpoint_path" in model.get_params():  # resumable training (docs/training_recipes.md)
@@ -149,6 +174,8 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
     start, cpu_start = time.perf_counter(), time.process_time()
     if table:
         model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback)
+    elif pooled:
+        model.fit(X_fit, y_fit, epoch_callback=epoch_callback, groups=fit_recordings)
     else:  # windows of one recording stay in one fold when a net chooses its epochs on folds
         model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback,
                   **_recording_groups(model, datamodule))
@@ -161,7 +188,13 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
     proba_test = model.predict_proba(X_test)
     val_levels = getattr(datamodule, "val_levels_per_window", None)
     val_recordings = getattr(datamodule, "val_window_recording", None)
-    if len(y_val) == 0:  # every class has one training recording: nothing could be carved
+    if pooled:  # the validation recordings were trained on: every training recording is scored held out
+        proba, y_val, val_recordings, val_levels = model.out_of_fold_proba_, y_fit, fit_recordings, fit_levels
+        summary["validation"] = (f"held-out predictions ({model.out_of_fold_method_}) of all {len(np.unique(fit_recordings))} "
+                                 f"training recordings, the {summary['n_val_recordings']} carved for validation "
+                                 "among them: the model is trained on every one")
+        summary["n_fit_recordings"] = int(len(np.unique(fit_recordings)))
+    elif len(y_val) == 0:  # every class has one training recording: nothing could be carved
         if getattr(model, "out_of_fold_proba_", None) is None:
             raise InputError(f"{type(model).__name__} has no validation recordings to be scored on (every class has "
                              "one training recording); declare 'val' recordings in the file's split")
@@ -191,7 +224,7 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
         if getattr(model, "fold_best_epochs_", None) is not None:  # the folds that chose the epoch count
             metrics["training"]["fold_best_epochs"] = model.fold_best_epochs_
             metrics["training"]["out_of_fold_accuracy"] = float(
-                (model.out_of_fold_proba_.argmax(axis=1) == y_train).mean())
+                (model.out_of_fold_proba_.argmax(axis=1) == y_fit).mean())
     hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed}
     if table:
         pipeline = table_classifier_pipeline(datamodule, model)

@@ -80,3 +80,51 @@ def test_recordings_choose_the_better_model_on_validation_when_the_budget_allows
     accuracy = {name: score["accuracy"] for name, score in choice["validation"].items()}
     assert choice["chosen"] == max(accuracy, key=accuracy.get) or "not significantly more (McNemar" in choice["reason"]
     assert metrics["val"]["accuracy"] == pytest.approx(choice["validation"][choice["chosen"]]["accuracy"])
+
+
+def declared_train_test(path, n=36, steps=64):
+    """Tones as above with a declared train / test split and no validation: 24 train, 12 test."""
+    recordings(path, n, steps)
+    with np.load(path) as data:
+        X, y = data["X"], data["y"]
+    np.savez(path, X=X, y=y, split=np.where(np.arange(n) % 3 == 2, "test", "train"))
+    return X[np.arange(n) % 3 == 2]
+
+
+def test_a_declared_train_test_split_chooses_on_held_out_training_predictions_and_trains_on_every_recording(
+        compose_config, tmp_path, monkeypatch):
+    """Every candidate fits all 24 training recordings (none carved off for validation), is scored
+    on its own held-out predictions of them (ROCKET: leave-one-out; the net: its folds'), and no
+    test recording reaches the choice."""
+    from models.rocket.classifier import RocketClassifier
+    from models.timeseries_classifier import TimeSeriesClassifier
+    X_test = declared_train_test(tmp_path / "rig.npz")
+    seen = []
+    for cls in (RocketClassifier, TimeSeriesClassifier):
+        for method in ("fit", "predict_proba"):
+            def spy(self, X, *args, _real=getattr(cls, method), _method=method, **kwargs):
+                seen.append((type(self).__name__, _method, np.asarray(X)))
+                return _real(self, X, *args, **kwargs)
+            monkeypatch.setattr(cls, method, spy)
+    overrides = ["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "trainer.max_epochs=2",
+                 "trainer.progress=false", "model.budget_s=null", "cost.onnx_latency_calls=0",
+                 "model.candidates.recordings.hydra_minirocket.n_features=840",
+                 "~model.candidates.recordings.rescnn", "~model.candidates.recordings.inceptiontime"]
+    metrics = run(compose_config(overrides), tmp_path / "run")
+    choice = metrics["choice"]
+    assert choice["scored_on"] == {"rows": "training, held out", "n": 24,
+                                   "by": {"hydra_minirocket": "leave-one-out", "prcnn": "3 stratified folds"}}
+    assert "held-out accuracy over all 24 training rows" in choice["reason"]
+    assert metrics["data"]["n_train_recordings"] + metrics["data"]["n_val_recordings"] == 24
+    assert metrics["data"]["n_fit_recordings"] == 24 and "trained on every one" in metrics["data"]["validation"]
+    assert metrics["val"]["accuracy"] == pytest.approx(choice["validation"][choice["chosen"]]["accuracy"])
+    fits = [(name, len(X)) for name, method, X in seen if method == "fit"]
+    assert ("RocketClassifier", 24) in fits and ("TimeSeriesClassifier", 24) in fits   # the choice's fits: all 24
+    assert max(n for _, n in fits) == 24                                               # none saw a test recording
+    # The run's first call on 12 recordings is the reported model's test prediction (folds hold out 8):
+    # the windows as the datamodule hands them over; nothing before it, the choice included, saw one.
+    first_test = next(k for k, (_, method, X) in enumerate(seen) if method == "predict_proba" and len(X) == len(X_test))
+    test_rows = {row.tobytes() for row in seen[first_test][2]}
+    assert first_test > 0 and not any(row.tobytes() in test_rows for _, _, X in seen[:first_test] for row in X)
+    again = run(compose_config(overrides), tmp_path / "again")   # same seed, same choice and scores
+    assert again["choice"]["validation"] == choice["validation"] and again["test"] == metrics["test"]

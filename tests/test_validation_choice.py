@@ -147,3 +147,43 @@ def test_a_costlier_classifier_must_be_right_on_significantly_more_validation_ro
     assert ("not significantly more" in choice.reason_) == (chosen == "cheap")
     with pytest.raises(InputError, match="model.significance_z must be a number >= 0"):
         ValidationChoice({"cheap": OneFeature(0)}, significance_z=-1).fit(X, (X[:, 0] > 0).astype(int), X_val, y_val)
+
+
+class HeldOut(ClassifierMixin, BaseEstimator):
+    """Classifies by the sign of one feature; its held-out predictions of its training rows are
+    those of a fit on the other half (two folds), and it counts the rows each fit saw."""
+    def __init__(self, feature=0):
+        self.feature = feature
+
+    def fit(self, X, y, groups=None):
+        self.classes_, self.n_fit_rows_ = np.unique(y), len(X)
+        self.out_of_fold_proba_ = self.predict_proba(X)
+        self.out_of_fold_method_ = "2 folds"
+        return self
+
+    def predict_proba(self, X):
+        positive = 1 / (1 + np.exp(-3 * X[:, self.feature]))
+        return np.column_stack([1 - positive, positive])
+
+
+def test_scored_on_training_every_candidate_trains_on_every_row_and_is_scored_on_its_held_out_predictions():
+    rng = np.random.default_rng(5)
+    X = rng.standard_normal((60, 2))
+    y = (X[:, 1] > 0).astype(int)                   # feature 1 carries the label
+    choice = ValidationChoice({"first": HeldOut(0), "second": HeldOut(1)}, ensemble=False, score_on="training",
+                              relative_cost={"first": 1, "second": 2}).fit(X, y)
+    assert {m.n_fit_rows_ for m in choice.models_.values()} == {60}    # no rows carved off for validation
+    assert choice.chosen_ == "second" and choice.chosen_model_.n_fit_rows_ == 60
+    assert choice.scores_["second"]["accuracy"] == 1.0
+    assert choice.scores_["first"]["accuracy"] == float(((X[:, 0] > 0) == y).mean())
+    report = choice.report()["scored_on"]
+    assert report == {"rows": "training, held out", "n": 60, "by": {"first": "2 folds", "second": "2 folds"}}
+    assert "held-out accuracy over all 60 training rows" in choice.reason_ and "second 2 folds" in choice.reason_
+    with pytest.raises(InputError, match="validation rows would go unused"):
+        ValidationChoice({"a": HeldOut(0)}, score_on="training").fit(X, y, X[:10], y[:10])
+    with pytest.raises(InputError, match="candidate plain gives no held-out predictions"):
+        ValidationChoice({"plain": OneFeature(0)}, score_on="training").fit(X, y)
+    with pytest.raises(InputError, match="regression chooses on validation rows"):
+        ValidationChoice({"constant": Constant()}, score_on="training").fit(*regression_data(40))
+    with pytest.raises(InputError, match="model.score_on must be one of auto, validation, training"):
+        ValidationChoice({"a": HeldOut(0)}, score_on="test").fit(X, y)

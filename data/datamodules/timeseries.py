@@ -41,7 +41,7 @@ from data.physics.force_sensing_resistor import calibrated_channel_name, fsr_for
 from data.preprocessing.virtual_force_levels import virtual_force_levels
 from data.preprocessing.windows import cut_windows, decimate
 from data.recording_set import RecordingSet
-from data.splits.indices import AUTO, SPLIT_NOTES, predefined_split, resolve_split
+from data.splits.indices import AUTO, SPLIT_NOTES, predefined_split, resolve_split, split_values
 
 log = logging.getLogger(__name__)
 
@@ -223,6 +223,7 @@ class TimeSeriesDataModule:
 
     def _split_recordings(self, labels):
         """(train, validation, test) recording indices; every window follows its recording."""
+        self.validation_carved = False
         if self.split in ("force_level", "stratified"):  # predefined: the data say which are test
             _check_fraction("test_fraction", self.test_fraction)
         if self.split == "force_level":
@@ -258,8 +259,12 @@ class TimeSeriesDataModule:
             where = self._where(self.recordings_description)
             declared = labels["split"].to_numpy() if "split" in labels else None
             self.test_stratified_by = None  # declared by the data, not drawn here
-            return predefined_split(declared, self.val_fraction, self.seed, str(where),
-                                    strata=labels[self.label].astype(str).to_numpy())
+            train, val, test = predefined_split(declared, self.val_fraction, self.seed, str(where),
+                                                strata=labels[self.label].astype(str).to_numpy())
+            # Validation carved from the declared training recordings (none declared 'val'): the
+            # default model may train on them and score on held-out predictions (runs/classification.py).
+            self.validation_carved = "val" not in set(split_values(declared, str(where)).tolist())
+            return train, val, test
         raise InputError(f"data.split must be one of {', '.join(SPLITS)}, got '{self.split}'")
 
     def setup(self) -> "TimeSeriesDataModule":

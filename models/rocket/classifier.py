@@ -11,6 +11,13 @@ chosen to minimise the log loss of the leave-one-out scores (no window is scored
 saw it). The standardisation, the head and the temperature fold into one linear layer of the
 module, so the eager pipeline and the exported graph compute the same map.
 
+Held-out predictions on the training windows (`out_of_fold_proba_`, what the default model's
+choice scores a candidate on when it trains on every training recording, models/validation_choice.py):
+the ridge head's exact leave-one-out scores through the same softmax, free with the fit, when every
+window is its own recording; otherwise (the logistic head, or windows that share a recording: `groups`)
+the head refitted on `n_folds` stratified folds by recording (the transform and its scaling are the
+full fit's: they see no label). `out_of_fold_method_` says which.
+
 Each channel is standardised with the training windows' statistics first (as the networks do),
 so that channels of different scales weigh alike in a kernel's channel combination.
 Deterministic under `seed`; no epochs: `fit` never calls the epoch callback.
@@ -26,6 +33,7 @@ from sklearn.linear_model import LogisticRegression
 
 from common.errors import InputError
 from common.standardise import mean_and_scale
+from data.splits.indices import stratified_folds
 from models.rocket.hydra import HydraMiniRocket
 from models.rocket.minirocket import MIN_LENGTH, N_KERNELS, MiniRocket
 from models.rocket.ridge_loo import class_indicators, ridge_loo
@@ -39,7 +47,7 @@ MAX_TEMPERATURE = 10.0     # ridge scores are about +-1: at most a logit gap of 
 
 class RocketClassifier(BaseEstimator, ClassifierMixin):
     def __init__(self, n_features=10_000, head="auto", ridge_max_samples=2_000, logistic_c=1.0,
-                 logistic_max_iter=1_000, seed=0, member="minirocket"):
+                 logistic_max_iter=1_000, seed=0, member="minirocket", n_folds=3):
         self.n_features = n_features
         self.head = head
         self.ridge_max_samples = ridge_max_samples
@@ -47,6 +55,7 @@ class RocketClassifier(BaseEstimator, ClassifierMixin):
         self.logistic_max_iter = logistic_max_iter
         self.seed = seed
         self.member = member
+        self.n_folds = n_folds
 
     def _checked(self, X) -> np.ndarray:
         X = np.asarray(X, dtype=np.float64)
@@ -74,7 +83,9 @@ class RocketClassifier(BaseEstimator, ClassifierMixin):
             return torch.cat([self.module_.transform(torch.from_numpy(X[s:s + step]))
                               for s in range(0, len(X), step)]).numpy().astype(np.float64)
 
-    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None):
+    def fit(self, X, y, X_val=None, y_val=None, epoch_callback=None, groups=None):
+        """`groups`: the recording of each training window (held-out predictions keep a recording's
+        windows together); None: every window is its own recording."""
         if self.head not in HEADS:
             raise InputError(f"model.head must be one of {', '.join(HEADS)}, got {self.head!r}")
         if self.member not in MEMBERS:
@@ -98,10 +109,8 @@ class RocketClassifier(BaseEstimator, ClassifierMixin):
         feature_mean[prescaled:], feature_scale[prescaled:] = 0.0, 1.0
         Z = (features - feature_mean) / feature_scale
         self.head_ = self.head if self.head != "auto" else ("ridge" if len(X) <= self.ridge_max_samples else "logistic")
-        if self.head_ == "ridge":
-            weights, intercept = self._ridge(Z, y, n_classes)
-        else:
-            weights, intercept = self._logistic(Z, y, n_classes)
+        weights, intercept, loo_logits = self._head(Z, y, n_classes, report=True)
+        self._held_out(Z, y, n_classes, loo_logits, groups)
         with torch.no_grad():  # standardisation and head folded: logits = features @ W' + b'
             folded = weights / feature_scale[:, None]
             self.module_.head.weight.copy_(torch.from_numpy(folded.T.astype(np.float32)))
@@ -109,15 +118,36 @@ class RocketClassifier(BaseEstimator, ClassifierMixin):
         self.n_features_in_ = X.shape[1]
         return self
 
-    def _ridge(self, Z, y, n_classes):
+    def _head(self, Z, y, n_classes, report=False):
+        """(weights, intercept) giving logits, and the leave-one-out logits (ridge) or None."""
+        if self.head_ == "logistic":
+            return (*self._logistic(Z, y, n_classes), None)
         fit = ridge_loo(Z, class_indicators(y, n_classes))
-        self.alpha_ = fit.alpha
         picked = np.arange(len(y)), y
         result = minimize_scalar(lambda t: -log_softmax(t * fit.loo_predictions, axis=1)[picked].mean(),
                                  bounds=(1e-2, MAX_TEMPERATURE), method="bounded")
-        self.temperature_ = float(result.x)
-        log.info("ridge head: alpha %.3g by leave-one-out, softmax temperature %.3g", self.alpha_, self.temperature_)
-        return fit.coef * self.temperature_, fit.intercept * self.temperature_
+        temperature = float(result.x)
+        if report:
+            self.alpha_, self.temperature_ = fit.alpha, temperature
+            log.info("ridge head: alpha %.3g by leave-one-out, softmax temperature %.3g", fit.alpha, temperature)
+        return fit.coef * temperature, fit.intercept * temperature, fit.loo_predictions * temperature
+
+    def _held_out(self, Z, y, n_classes, loo_logits, groups):
+        """out_of_fold_proba_: each training window predicted by a head fitted without its recording."""
+        groups = np.arange(len(y)) if groups is None else np.asarray(groups)
+        if len(groups) != len(y):
+            raise InputError(f"{len(groups)} recording ids for {len(y)} training windows")
+        if loo_logits is not None and np.unique(groups).size == len(y):
+            self.out_of_fold_proba_ = np.exp(log_softmax(loo_logits, axis=1))
+            self.out_of_fold_method_ = "leave-one-out"
+            return
+        logits = np.zeros((len(y), n_classes))
+        folds = stratified_folds(y, groups, self.n_folds, self.seed)
+        for fit_rows, held_rows in folds:
+            weights, intercept, _ = self._head(Z[fit_rows], y[fit_rows], n_classes)
+            logits[held_rows] = Z[held_rows] @ weights + intercept
+        self.out_of_fold_proba_ = np.exp(log_softmax(logits, axis=1))
+        self.out_of_fold_method_ = f"{len(folds)} stratified folds"
 
     def _logistic(self, Z, y, n_classes):
         model = LogisticRegression(C=self.logistic_c, max_iter=self.logistic_max_iter).fit(Z, y)
