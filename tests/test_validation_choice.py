@@ -187,3 +187,29 @@ def test_scored_on_training_every_candidate_trains_on_every_row_and_is_scored_on
         ValidationChoice({"constant": Constant()}, score_on="training").fit(*regression_data(40))
     with pytest.raises(InputError, match="model.score_on must be one of auto, validation, training"):
         ValidationChoice({"a": HeldOut(0)}, score_on="test").fit(X, y)
+
+
+def test_the_rocket_familys_held_out_predictions_are_exact_leave_one_out():
+    """Each training window's out_of_fold_proba_ is what the head refitted without it (same penalty,
+    same features and temperature) predicts; windows sharing a recording are held out by folds."""
+    from scipy.special import softmax
+
+    from common.standardise import mean_and_scale
+    from models.rocket.classifier import RocketClassifier
+    from models.rocket.ridge_loo import class_indicators, ridge_loo
+    rng = np.random.default_rng(0)
+    y = np.arange(30) % 3
+    X = np.sin(2 * np.pi * (1 + y)[:, None, None] * np.linspace(0, 1, 40) + rng.uniform(0, 6, (30, 1, 1)))
+    X = X + 0.7 * rng.standard_normal(X.shape)
+    model = RocketClassifier(n_features=840).fit(X, y)
+    assert model.out_of_fold_method_ == "leave-one-out"
+    features = model.transform(X)
+    mean, scale = mean_and_scale(features)
+    Z, targets = (features - mean) / scale, class_indicators(y, 3)
+    for i in (0, 7, 29):
+        rest = np.arange(30) != i
+        alone = ridge_loo(Z[rest], targets[rest], alphas=[model.alpha_])
+        expected = softmax(model.temperature_ * (Z[i] @ alone.coef + alone.intercept))
+        np.testing.assert_allclose(model.out_of_fold_proba_[i], expected, rtol=1e-6, atol=1e-9)
+    grouped = RocketClassifier(n_features=840).fit(X, y, groups=np.arange(30) // 2)
+    assert grouped.out_of_fold_method_ == "3 stratified folds" and grouped.out_of_fold_proba_.shape == (30, 3)
