@@ -45,7 +45,7 @@ def test_shear_sensitivity_is_below_the_theory_and_the_hair_raises_it(probe):
     ceiling = 0.75 * THEORY["shear_sensitivity"]                          # 0.32: a quarter below 0.429
     assert measured.numbers["mechanics"] < ceiling                         # table: 0.238
     mean, sd = measured.numbers["read_back"]
-    assert mean + 3 * sd < ceiling and sd > 0                              # table: 0.25 ± 0.01 (20 seeds)
+    assert mean + 3 * sd < ceiling and sd > 0                              # table: 0.252 ± 0.005 (20 seeds)
     assert measured.numbers["hair"] > 5 * measured.numbers["flat"]        # table: 4.50 vs 0.34
 
 

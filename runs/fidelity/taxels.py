@@ -8,9 +8,9 @@ How each row is measured (the probe, `TaxelsProbe`, holds the composed scene con
 - rows 1-4 scan the paper's needle (10 mN) along a taxel row, the profile's features by eq. (3)-(4)
   (runs/studies/taxel_receptive_field.py: W between eps_z's zero crossings, A = |eps_z| at its
   peak, the ratio = |peak / tensile lobe|). "Mechanics" is the scene's noise-free strain at the
-  taxel (its cover, needle and sensing area: what the chain reads without noise); "read back" is
-  eq. (2) applied to the bridge voltages through amplifier, noise and ADC, over `repeats` noise
-  seeds (mean ± sd). Row 1 and 4 are at the paper's Fig. 2 cover (180 um); rows 2-3 fit W and A
+  taxel (its cover, needle, sensing area and the membrane's tilt: what the chain reads without
+  noise); "read back" is eq. (2) applied to the bridge voltages through amplifier, noise and ADC,
+  over `repeats` noise seeds (mean ± sd). Row 1 and 4 are at the paper's Fig. 2 cover (180 um); rows 2-3 fit W and A
   over the paper's Fig. 4 range (150-1000 um) on the mechanics (at 1000 um the tensile lobe is
   below the read-back noise, so a noisy W says nothing: that number is reported beside).
 - rows 5-6 measure the surface structures on their own variants (taxels_bump, taxels_ridge,
