@@ -44,9 +44,12 @@ VARIANTS = {
                            PER_POINT),
     "drift_restoring_10": (RESTORING, (), {}),
     "drift_restoring_50": ({"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 50.0}}, (), {}),
+    "restoring_50_per_point": ({"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 50.0}}, (),
+                               PER_POINT),
     "restoring_per_point": (RESTORING, (), PER_POINT),
     "restoring_per_point_anisotropy_2": ({**RESTORING, "fabric_anisotropy": {"ratio": 2.0}}, (), PER_POINT),
     "restoring_per_point_electrode_error_5mm": ({**RESTORING, "electrode_position_error": {"sd_mm": 5.0}}, (), PER_POINT),
+    "restoring_per_point_same_alpha_1e-3": (RESTORING, (), PER_POINT, {"alpha_relative": [1.0e-3]}),
     "two_point_4n": ({}, (), {"two_point_force_n": 4.0}),
     "ideal": ({}, ("specimen_variation", "electrode_position_error", "foam_spread", "hysteresis", "baseline_drift"), {}),
 }

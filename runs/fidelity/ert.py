@@ -175,7 +175,7 @@ def force_estimation(probe: ErtProbe) -> Measured:
     at_seed = [r["force_error_n"] < q["force_error_n"] and r["force_r"] > q["force_r"]
                for r, q in zip(internal["per_seed"], boundary["per_seed"])]
     holds = better(internal, boundary) and all(at_seed)
-    return Measured(f"|error| internal {_fmt(internal['force_error_n'])} vs boundary {_fmt(boundary['force_error_n'])} N; "
+    return Measured(f"mean absolute error internal {_fmt(internal['force_error_n'])} vs boundary {_fmt(boundary['force_error_n'])} N; "
                     f"r {_fmt(internal['force_r'], 3)} vs {_fmt(boundary['force_r'], 3)} (at "
                     f"{', '.join(f'{f:g}' for f in REFERENCE_FORCES_N)} N; {_reference_frame(probe)}); both better "
                     f"at {sum(at_seed)} of {len(at_seed)} seeds", holds=bool(holds),
