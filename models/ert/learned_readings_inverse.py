@@ -7,15 +7,18 @@ GREIT-like linear map (Adler et al. 2009, eq. 8 and 10) from the 276 reduced rea
 u = K^T v (readings.py) to the 10 x 10 patch loads, trained on simulated presses whose desired
 image is the true patch loads (data/scenes/ert.py `patch_loads_n`, the scene's own footprint and
 foam spread), with a noise term lambda K^T K. Step two reads the press from the
-(2h + 1)^2 patches around the patch whose 3 x 3 neighbourhood carries most load (relative loads
-and the log of the largest): an MLP
-predicts the offset from that patch's centre and the force. The window moves with the press, so
-every training press teaches the same local map (translation-equivariant, which is what lets a
-few thousand presses suffice; an MLP on all 276 readings needed far more and did worse).
+(2h + 1)^2 patches around the patch whose 3 x 3 neighbourhood carries most load (relative loads,
+the log of the largest, and where the window sits on the sheet): an MLP predicts the offset
+from that patch's centre and the force. The window moves with the press, so every training
+press teaches the same local map (an MLP on all 276 readings needed far more presses and did
+worse); its place lets the MLP learn what differs near edges and electrodes.
 
 Training presses come from `n_training_sensors` simulated sensors (seeds `training_seed` + k,
 never the sensor under test: runs/studies/ert_tests.py refuses a collision) through
-GreitReconstruction.training_frames, the one simulator of other sensors' presses. `fit(X, y)`
+GreitReconstruction.training_frames, the one simulator of other sensors' presses, reduced to u
+sensor by sensor. The amount matters most: 40 sensors x 1,000 presses instead of 20 x 500 took
+one boundary sensor from 3.35 to 2.79 mm at 10 N (docs/ert.md); a wider net (256) trained
+longer (60 epochs) on them did worse (3.00 mm). `fit(X, y)`
 receives validation presses of the sensor under test (a calibration recording): only the noise
 weight lambda is chosen there; the networks never see them.
 
@@ -23,6 +26,9 @@ The whole map is one torch module (`module_`): the voltages -> patch loads matri
 patch map, folded), the window gather and the MLP, so `predict` and its ONNX graph
 (export/torch_graphs.py `to_onnx`) are the same computation.
 """
+import json
+from functools import lru_cache
+
 import numpy as np
 import torch
 from sklearn.base import BaseEstimator, RegressorMixin
@@ -49,7 +55,7 @@ class PatchWindowNet(nn.Module):
         offsets = torch.arange(span)
         padded_side = self.n_side + 2 * self.half_width
         self.register_buffer("window_index", (offsets[:, None] * padded_side + offsets[None, :]).reshape(-1))
-        n_features = span * span + 1
+        n_features = span * span + 3
         self.register_buffer("feature_mean", torch.zeros(n_features))
         self.register_buffer("feature_scale", torch.ones(n_features))
         layers, size = [], n_features
@@ -59,8 +65,11 @@ class PatchWindowNet(nn.Module):
         self.mlp = nn.Sequential(*layers, nn.Linear(size, 3))
 
     def features(self, voltages):
-        """(patch-centre xy of the arg-max patch (n, 2), window features (n, (2h + 1)^2 + 1))."""
-        loads = voltages @ self.load_map
+        """(patch-centre xy of the window's middle patch (n, 2), window features (n, n_features))."""
+        return self.load_features(voltages @ self.load_map)
+
+    def load_features(self, loads):
+        """`features` from the patch loads (n, n_patches)."""
         n, h = self.n_side, self.half_width
         # the window sits on the patch whose 3 x 3 neighbourhood carries most load: the single
         # largest patch of a weak press is at times a distant noise peak, the neighbourhood rarely
@@ -71,7 +80,10 @@ class PatchWindowNet(nn.Module):
         window = torch.gather(padded, 1, (iy * (n + 2 * h) + ix)[:, None] + self.window_index[None, :])
         top = window.max(dim=1, keepdim=True).values.clamp_min(1e-6)
         centre = torch.stack([ix, iy], dim=1).to(loads.dtype) * self.patch_mm + 0.5 * self.patch_mm
-        return centre, torch.cat([window / top, torch.log(top)], dim=1)
+        # where the window sits (-1 to 1 across the sheet): near an edge or an electrode the same
+        # window means a different offset, and what cannot be told apart is best guessed per place
+        place = centre / (n * self.patch_mm) * 2.0 - 1.0
+        return centre, torch.cat([window / top, torch.log(top), place], dim=1)
 
     def forward(self, voltages):
         return self.head(*self.features(voltages))
@@ -82,12 +94,27 @@ class PatchWindowNet(nn.Module):
         return torch.cat([centre + OFFSET_SCALE_MM * out[:, :2], FORCE_CENTRE_N + FORCE_SCALE_N * out[:, 2:]], dim=1)
 
 
+@lru_cache(maxsize=2)
+def _reduced_presses(simulator_json: str) -> tuple[np.ndarray, np.ndarray]:
+    """(u = K^T v, targets) of GreitReconstruction(**params)'s training presses, simulated one
+    sensor at a time and reduced at once: 40,000 full frames of 6,624 channels would hold 2 GB,
+    their reduced readings 90 MB. Kept per process: every sensor under test reuses them."""
+    params = json.loads(simulator_json)
+    basis = transfer_basis(params["geometry"])
+    readings, targets = [], []
+    for seed in GreitReconstruction(**params).training_sensor_seeds():
+        voltages, part = GreitReconstruction(**{**params, "n_training_sensors": 1, "training_seed": seed}).training_frames()
+        readings.append(np.asarray(basis.T @ voltages.T).T)
+        targets.append(part)
+    return np.vstack(readings), np.vstack(targets)
+
+
 class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
     """ERT voltages (changes from the unloaded frame) -> (x_mm, y_mm, force_n)."""
 
     def __init__(self, geometry=None, training_scene=None, patch_mm=20.0, foam_spread_sd_mm=None,
-                 n_training_sensors=20, presses_per_sensor=500, training_force_range_n=(1.0, 15.0),
-                 training_seed=20_000, noise_weights=(1e-6, 1e-5, 1e-4), half_width_patches=2, width=128,
+                 n_training_sensors=40, presses_per_sensor=1000, training_force_range_n=(1.0, 15.0),
+                 training_seed=20_000, noise_weights=(1e-5, 1e-4, 1e-3), half_width_patches=2, width=128,
                  epochs=30, batch_size=256, learning_rate=3e-3, quantification_limit_n=2.0, seed=0):
         self.geometry = geometry
         self.training_scene = training_scene
@@ -116,6 +143,13 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
 
     def training_sensor_seeds(self) -> list[int]:
         return self._simulator().training_sensor_seeds()
+
+    def _training_readings(self) -> tuple[np.ndarray, np.ndarray]:
+        """(u = K^T v, targets) of the training presses."""
+        simulator = self._simulator().get_params()
+        return _reduced_presses(json.dumps({**simulator, "training_force_range_n": list(simulator["training_force_range_n"]),
+                                            "training_position_range_mm": list(simulator["training_position_range_mm"])},
+                                           sort_keys=True))
 
     def _spread_sd_mm(self) -> float:
         """The foam spread the training scene simulates (its `foam_spread` effect), unless given."""
@@ -148,17 +182,16 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
                              f"limit ({self.quantification_limit_n} N); at least 4 are needed")
         side = float(self.geometry["side_mm"])
         n_side = int(round(side / float(self.patch_mm)))
-        voltages, targets = self._simulator().training_frames()
+        u, targets = self._training_readings()
         loads = patch_loads_n(targets[:, None, :3], side, float(self.patch_mm),
                               self.geometry["indenter_diameter_mm"] / 2.0, self._spread_sd_mm())
-        u = np.asarray(basis.T @ voltages.T).T
         noise = np.asarray((basis.T @ basis).todense())
         signal = u.T @ u
         scale = np.trace(signal) / np.trace(noise)
         best, scores = None, []
         for weight in weights:
             patch_map = np.linalg.solve(signal + weight * scale * noise, u.T @ loads)        # (n_z, n_patches)
-            module = self._train(np.asarray(basis @ patch_map), voltages, targets, n_side)
+            module = self._train(np.asarray(basis @ patch_map), u @ patch_map, targets, n_side)
             with torch.no_grad():
                 xy = module(torch.as_tensor(X[usable], dtype=torch.float32)).numpy()[:, :2]
             error = float(np.hypot(*(xy - y[usable, :2]).T).mean())
@@ -170,14 +203,13 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
         self.n_features_in_ = basis.shape[0]
         return self
 
-    def _train(self, load_map, voltages, targets, n_side) -> PatchWindowNet:
+    def _train(self, load_map, loads, targets, n_side) -> PatchWindowNet:
         generator = torch.Generator().manual_seed(int(self.seed))
         with torch.random.fork_rng(devices=[]):
             torch.manual_seed(int(self.seed))
             module = PatchWindowNet(load_map, n_side, self.patch_mm, int(self.half_width_patches), int(self.width))
-        inputs = torch.as_tensor(voltages, dtype=torch.float32)
         with torch.no_grad():     # the patch map is fixed: its features once, not per step
-            centre, features = module.features(inputs)
+            centre, features = module.load_features(torch.as_tensor(loads, dtype=torch.float32))
             module.feature_mean.copy_(features.mean(dim=0))
             module.feature_scale.copy_(features.std(dim=0) + 1e-6)
         goal = torch.as_tensor(targets[:, :3], dtype=torch.float32)
