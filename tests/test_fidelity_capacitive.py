@@ -1,5 +1,6 @@
 """The capacitive fidelity rows that hold (runs/fidelity/capacitive6x6.py, docs/fidelity.md) keep
-holding, with margin, on one seed; the model ranking under both protocols is measured (slow).
+holding, with margin, on one seed; the paper-configured models are what they say; on the curved
+variant the tree wins; the model ranking under both protocols is measured (slow).
 Row 1 (time per frame) is not asserted: no timed assertions."""
 import numpy as np
 import pytest
@@ -55,14 +56,45 @@ def test_roughness_tells_steps_from_a_smooth_curve():
     assert rows.roughness(force, force + noise) < 0.015 < 0.1 < rows.roughness(force, steps)
 
 
+def test_paper_configured_models_are_one_per_sensor_from_its_own_reading():
+    """The paper-configured linear regression is, press for press, a least-squares line from the
+    pressed cell's reading to force fitted on that cell's training presses alone."""
+    probe = rows.CapacitiveProbe(scene_params("capacitive6x6", ["scene.n_repetitions=10"]), seeds=[0])
+    table = probe.tables[0]
+    train, test = rows.split(table, "paper", seed=0)
+    rmc, force, cell = rows._pressed_cell_rmc(table), table.frame["force_n"].to_numpy(), rows._pressed_cell_index(table)
+    expected = np.empty(len(test))
+    for which in np.unique(cell):
+        slope, intercept = np.polyfit(rmc[train][cell[train] == which], force[train][cell[train] == which], 1)
+        expected[cell[test] == which] = slope * rmc[test][cell[test] == which] + intercept
+    rmse = np.sqrt(np.mean((expected - force[test]) ** 2))
+    assert probe.fit("paper", 0, "linear_regression", "paper-configured")["rmse"] == pytest.approx(rmse, rel=1e-9)
+    assert len(probe.fit("paper", 0, "gaussian_process", "paper-configured")["sweep"]) == rows.SWEEP_PRESSES
+
+
+def test_on_the_curved_sensor_the_paper_configured_tree_is_best_by_a_margin():
+    """Row 4a as it is judged (docs/fidelity.md): on capacitive6x6_curved, whose response bends as
+    the paper's does, the paper-configured tree beats the linear models on the paper's split and
+    on the split by repetition, and the GP with scikit-learn 1.2.2's default kernel (fixed, no
+    noise term) interpolates noisy repeats far off the force (row 5)."""
+    probe = rows.CapacitiveProbe(scene_params("capacitive6x6_curved", ["scene.n_repetitions=20"]), seeds=[0])
+    for protocol in rows.PROTOCOLS:
+        rmse = {m: v.mean() for m, v in probe.per_model(protocol, "rmse", configuration="paper-configured").items()}
+        assert rmse["decision_tree"] < 0.6 * min(rmse["linear_regression"], rmse["svr"])   # table: 0.02 vs 0.05 N
+        assert rmse["gaussian_process"] > 1.0                                          # table: several N
+    r2 = probe.per_model("paper", "r2", configuration="paper-configured")
+    assert 0.99 < r2["linear_regression"].mean() < 0.999 < r2["decision_tree"].mean()   # the paper: 0.995-0.998, 0.9996
+
+
 @pytest.mark.slow
 def test_model_ranking_is_measured_under_both_protocols():
     """Rows 3-4a as bench/fidelity.py measures them on one seed (~1 min): every model scored
     under both splits, and the ranking reported for each."""
     probe = rows.CapacitiveProbe(scene_params("capacitive6x6"), seeds=[0])
     measured = rows.decision_tree_is_best(probe)
-    assert set(measured.numbers["best"]) == set(rows.PROTOCOLS)
-    for protocol in rows.PROTOCOLS:
-        assert f"{protocol}: " in measured.value
+    assert len(measured.numbers["best"]) == len(rows.PROTOCOLS) * len(rows.CONFIGURATIONS)
+    for configuration in rows.CONFIGURATIONS:
+        for protocol in rows.PROTOCOLS:
+            assert f"{configuration}, {protocol}: " in measured.value
         r2 = probe.per_model(protocol, "r2")
         assert r2["linear_regression"].min() > 0.995                # the paper: linear > 0.995

@@ -59,6 +59,34 @@ def test_stiffer_spacer_reads_less():
     assert 0.45 < stiff.mean() / soft.mean() < 0.55   # half the compliance, half the closure (small strain)
 
 
+def test_gent_spacer_is_neo_hookean_without_a_limit_and_stiffens_as_it_closes():
+    stress = np.array([0.0, 1e3, 3e4, 1e5, 1e6])
+    neo = capacitive.neo_hookean_stretch(stress, 3.3e5)
+    assert np.allclose(capacitive.gent_stretch(stress, 3.3e5, 1e9), neo, atol=1e-8)
+    gent = capacitive.gent_stretch(stress, 3.3e5, 0.2)
+    assert gent[0] == 1.0 and np.all(np.diff(gent) < 0)                  # closes further under more stress
+    assert np.all(gent[1:] > neo[1:])                                     # but less than neo-Hookean
+    assert abs(1 - gent[1] / neo[1]) < 1e-4                               # the same at small strain
+    locking = gent[-1] ** 2 + 2 / gent[-1] - 3                            # I1 - 3 stays below J_m = 0.2
+    assert 0.15 < locking < 0.2
+    invariant = gent ** 2 + 2 / gent - 3                                  # and the stress is Gent's (Newton's check)
+    assert np.allclose(3.3e5 / 3 * (gent ** -2 - gent) * 0.2 / (0.2 - invariant), stress, rtol=1e-9)
+
+
+def test_curved_variant_bends_as_the_papers_sensor_and_keeps_its_calibration():
+    """configs/scene/capacitive6x6_curved.yaml: a line through the ten levels' mean readings has
+    R² 0.995-0.998 (seed 001's linear models), 3 N still reads ~140 counts, the slope ~48."""
+    variant = OmegaConf.to_container(OmegaConf.load(SCENES / "capacitive6x6_curved.yaml"))
+    force, change = pressed_cell_change(scene(**{k: variant[k] for k in ("spacer_limiting_i1", "counts_per_pf")},
+                                              press_cells=[[1, 1]]).generate())
+    levels, means = np.unique(force), np.array([change[force == f].mean() for f in np.unique(force)])
+    slope, intercept = np.polyfit(levels, means, 1)
+    line_r2 = 1 - np.var(means - (slope * levels + intercept)) / np.var(means)
+    assert 0.995 < line_r2 < 0.998, line_r2
+    assert 130 < means[-1] < 160 and 44 < slope < 52, (means[-1], slope)
+    assert np.all(np.diff(means / levels) < 0)                            # sensitivity falls with force
+
+
 def limit_of_detection_n(noise_counts):
     """LOD = 3 sigma_blank / sensitivity (IUPAC; Long & Winefordner, Anal. Chem. 55, 1983):
     sigma of one rest frame over the slope (counts per newton) of the pressed cell's change."""
@@ -279,6 +307,7 @@ def test_bad_npy_and_paths_are_one_line_errors(tmp_path):
 @pytest.mark.parametrize("kwargs, message", [
     ({"cover_thickness_mm": -4.0}, "cover_thickness_mm must be a positive number"),
     ({"spacer_permittivity": 0.5}, "spacer_permittivity"),
+    ({"spacer_limiting_i1": 0.0}, "spacer_limiting_i1 must be a positive number or null"),
     ({"protocol": "random"}, "protocol must be 'characterisation' or 'stream'"),
     ({"press_cells": [[6, 0]]}, r"press_cells must be \[row, col\] pairs inside the 6 x 6 grid"),
     ({"force_levels_n": [0.1, -1.0]}, "force_levels_n must be a list of positive forces"),

@@ -20,7 +20,9 @@ Ideal chain, per frame and crossing (what runs with no effect listed):
    loads of 2.5-5 mm radius); the soft Ecoflex below would spread the load a little more.
 2. The spacer closes under that stress. Soft silicones at tens of percent strain need a
    hyperelastic law (physics notes): incompressible neo-Hookean uniaxial compression,
-   sigma = (E/3)(lambda^-2 - lambda), solved for the stretch lambda = d / d0.
+   sigma = (E/3)(lambda^-2 - lambda), solved for the stretch lambda = d / d0; or, with
+   `spacer_limiting_i1` set, Gent's law (the neo-Hookean stress times J_m / (J_m - (I1 - 3))),
+   whose spacer stiffens as it closes, as a synthetic foam or fabric spacer does.
 3. Parallel-plate capacitance C = eps0 eps_r A / d (seed 001 eq. 1) with d = d0 lambda.
 4. The board reports C as raw counts ("ratio of mutual capacitance", RMC) with a gain
    `counts_per_pf`; the defaults are calibrated to seed 001 sec. 3.4: limit of detection
@@ -135,12 +137,53 @@ def neo_hookean_stretch(stress_pa: np.ndarray, youngs_modulus_pa: float) -> np.n
     return stretch
 
 
-def pressed_cell_rmc(frame: pd.DataFrame, rows: int, cols: int, pitch_mm: float) -> np.ndarray:
-    """Each press's reading at the cell it was pressed on (from the press's x_mm, y_mm)."""
+def gent_stretch(stress_pa: np.ndarray, youngs_modulus_pa: float, limiting_i1: float) -> np.ndarray:
+    """Stretch lambda <= 1 of an incompressible Gent solid under a uniaxial compressive stress
+    s >= 0: s = (E/3)(lambda^-2 - lambda) J_m / (J_m - (I1 - 3)), I1 = lambda^2 + 2/lambda
+    (Gent, "A new constitutive relation for rubber", Rubber Chem. Technol. 69, 59, 1996). The
+    neo-Hookean law times a factor that grows without bound as I1 - 3 reaches the limiting value
+    J_m (`limiting_i1`): the material stiffens as it closes, and J_m -> infinity is neo-Hookean.
+
+    Between the locking stretch (I1 - 3 = J_m) and 1 the stress is a positive, decreasing,
+    convex function of lambda (a product of two such factors), so Newton's method started left
+    of the root rises monotonically onto it. The neo-Hookean stretch is left of it (Gent is
+    stiffer), unless it lies beyond the locking stretch, where the start is just inside it."""
+    stress_pa = np.asarray(stress_pa, dtype=float)
+    stretch = np.ones(stress_pa.shape)
+    loaded = stress_pa > 0
+    s, g = stress_pa[loaded], youngs_modulus_pa / 3.0
+    # the locking stretch: I1 - 3 = J_m on lambda < 1, where I1 - 3 falls monotonically in lambda
+    low, high = 1e-6, 1.0
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if middle * middle + 2.0 / middle - 3.0 < limiting_i1 else (middle, high)
+    locking = high
+    value = np.maximum(neo_hookean_stretch(s, youngs_modulus_pa), locking + 1e-9 * (1.0 - locking))
+    for _ in range(200):  # a few steps from the neo-Hookean start; ~40 from just inside the lock
+        room = limiting_i1 - (value * value + 2.0 / value - 3.0)
+        neo = g * (1.0 / (value * value) - value)
+        f = neo * limiting_i1 / room - s
+        slope = (g * (-2.0 / value**3 - 1.0) * limiting_i1 / room
+                 + neo * limiting_i1 * (2.0 * value - 2.0 / (value * value)) / (room * room))
+        step = -f / slope
+        value = np.minimum(value + step, 1.0)
+        if not np.any(np.abs(step) > 1e-14):
+            break
+    stretch[loaded] = value
+    return stretch
+
+
+def pressed_cell(frame: pd.DataFrame, rows: int, cols: int, pitch_mm: float) -> np.ndarray:
+    """Each press's cell, as its row-major channel index row * cols + col (from the press's x_mm, y_mm)."""
     row = np.clip(np.rint(frame["y_mm"].to_numpy() / pitch_mm - 0.5).astype(np.int64), 0, rows - 1)
     col = np.clip(np.rint(frame["x_mm"].to_numpy() / pitch_mm - 0.5).astype(np.int64), 0, cols - 1)
+    return row * cols + col
+
+
+def pressed_cell_rmc(frame: pd.DataFrame, rows: int, cols: int, pitch_mm: float) -> np.ndarray:
+    """Each press's reading at the cell it was pressed on."""
     values = frame[channel_names(rows, cols)].to_numpy(dtype=np.float64)
-    return values[np.arange(len(values)), row * cols + col]
+    return values[np.arange(len(values)), pressed_cell(frame, rows, cols, pitch_mm)]
 
 
 def correlation_factor_rmc_per_n(rmc: np.ndarray, force_n: np.ndarray) -> float:
@@ -163,7 +206,7 @@ class Capacitive6x6Scene:
 
     def __init__(self, rows=6, cols=6, pitch_mm=6.0, protocol="characterisation", seed=0, effects=None,
                  cover_thickness_mm=4.0, spacer_thickness_mm=0.5, spacer_permittivity=2.8,
-                 spacer_youngs_modulus_pa=3.3e5, sensing_area_mm2=25.0, counts_per_pf=1000.0,
+                 spacer_youngs_modulus_pa=3.3e5, spacer_limiting_i1=None, sensing_area_mm2=25.0, counts_per_pf=1000.0,
                  frame_rate_hz=60.0,
                  probe_radius_mm=2.5, probe_profile="punch",
                  force_levels_n=(0.1, 0.2, 0.3, 0.5, 0.75, 1.0, 1.5, 2.0, 2.5, 3.0), n_repetitions=100,
@@ -182,6 +225,7 @@ class Capacitive6x6Scene:
         self.spacer_thickness_mm = spacer_thickness_mm
         self.spacer_permittivity = spacer_permittivity
         self.spacer_youngs_modulus_pa = spacer_youngs_modulus_pa
+        self.spacer_limiting_i1 = spacer_limiting_i1
         self.sensing_area_mm2 = sensing_area_mm2
         self.counts_per_pf = counts_per_pf
         self.frame_rate_hz = frame_rate_hz
@@ -222,6 +266,10 @@ class Capacitive6x6Scene:
             value = getattr(self, name)
             if not (isinstance(value, (int, float)) and np.isfinite(value) and value > 0):
                 fail(f"{name} must be a positive number, got {value!r}")
+        if self.spacer_limiting_i1 is not None and not (isinstance(self.spacer_limiting_i1, (int, float))
+                                                        and np.isfinite(self.spacer_limiting_i1)
+                                                        and self.spacer_limiting_i1 > 0):
+            fail(f"spacer_limiting_i1 must be a positive number or null (neo-Hookean), got {self.spacer_limiting_i1!r}")
         if not (np.isfinite(self.spacer_permittivity) and self.spacer_permittivity >= 1.0):
             fail(f"spacer_permittivity (relative) must be >= 1, got {self.spacer_permittivity!r}")
         if self.probe_profile not in PROFILES or self.contact_profile not in PROFILES:
@@ -309,9 +357,16 @@ class Capacitive6x6Scene:
         distance = np.hypot(x_cells[None] - x_mm[:, None, None], y_cells[None] - y_mm[:, None, None])
         return kernel_lookup(self._kernel(profile), distance, np.broadcast_to(radius_mm[:, None, None], distance.shape))
 
+    def spacer_stretch(self, stress_pa: np.ndarray) -> np.ndarray:
+        """d / d0 of the spacer under a vertical stress: neo-Hookean, or Gent's law when
+        `spacer_limiting_i1` is set."""
+        if self.spacer_limiting_i1 is None:
+            return neo_hookean_stretch(stress_pa, self.spacer_youngs_modulus_pa)
+        return gent_stretch(stress_pa, self.spacer_youngs_modulus_pa, float(self.spacer_limiting_i1))
+
     def ideal_change_counts(self, stress_pa: np.ndarray) -> np.ndarray:
         """Change in counts from rest of an ideal crossing under a vertical stress (no effects)."""
-        stretch = neo_hookean_stretch(stress_pa, self.spacer_youngs_modulus_pa)
+        stretch = self.spacer_stretch(stress_pa)
         return self.counts_per_pf * self.rest_capacitance_pf * (1.0 / stretch - 1.0)
 
     def read_frames(self, stress_pa: np.ndarray, time_s: np.ndarray, device: dict | None = None) -> dict:
@@ -325,7 +380,7 @@ class Capacitive6x6Scene:
         device = {} if device is None else device
         effects = resolve_effects(self.name, self.effects, EFFECTS)
         generators = device.setdefault("generators", {})
-        state = {"closure": 1.0 - neo_hookean_stretch(stress_pa, self.spacer_youngs_modulus_pa),
+        state = {"closure": 1.0 - self.spacer_stretch(stress_pa),
                  "time_s": np.asarray(time_s, dtype=float), "frame_rate_hz": float(self.frame_rate_hz),
                  "device": device}
         for _, fn, params in (e for e in effects if e[0] in MATERIAL_EFFECTS):

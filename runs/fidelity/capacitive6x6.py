@@ -16,8 +16,15 @@ standardised on the training rows as the datamodule does, to force_n. Two protoc
   configs/experiment/capacitive_force.yaml), so no test press shares a repetition, and its
   slice of drift, with a training press.
 Both see every force level in training: on this protocol the levels are discrete and repeated.
+
+Beside them, rows 4a and 5 fit the four models as the paper configured them (`PAPER_CONFIGURED`):
+the paper names scikit-learn (1.2.2, sec. 2.3) and of the settings only the SVR's linear kernel,
+so every other setting is the library's default, and it reports each sensor apart from that
+sensor's own reading (Table 2's rows, Fig. 18's force-RMC axes), so each pressed cell gets its
+own four models with its RMC change as the one feature, on the same train and test presses.
 """
 import os
+import warnings
 from functools import cached_property, lru_cache
 from pathlib import Path
 
@@ -25,10 +32,17 @@ import numpy as np
 from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
+from sklearn.exceptions import ConvergenceWarning
+from sklearn.gaussian_process import GaussianProcessRegressor
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel
+from sklearn.linear_model import LinearRegression
 from sklearn.metrics import r2_score
+from sklearn.svm import SVR
+from sklearn.tree import DecisionTreeRegressor
 
 from common.standardise import mean_and_scale
-from data.scenes.capacitive6x6 import Capacitive6x6Scene, correlation_factor_rmc_per_n, pressed_cell_rmc
+from data.scenes.capacitive6x6 import (Capacitive6x6Scene, correlation_factor_rmc_per_n, pressed_cell,
+                                       pressed_cell_rmc)
 from data.splits.indices import holdout
 from models.contact_tracking.timing import latency_summary, timed_updates
 from runs.fidelity.observations import Measured, observation, probe
@@ -40,6 +54,16 @@ MODELS = ("linear_regression", "svr", "decision_tree", "gaussian_process")
 PROTOCOLS = ("paper", "by repetition")
 TEST_FRACTION = 0.30
 SWEEP_PRESSES = 300
+CONFIGURATIONS = ("project", "paper-configured")
+# seed 001's four models with the defaults of the paper's scikit-learn 1.2.2 but the one setting
+# the paper names (the SVR's linear kernel). Its GP default kernel was 1.0 * RBF(1.0) with both
+# hyper-parameters fixed (not fitted) and no noise term (alpha 1e-10); scikit-learn fits the
+# default kernel's hyper-parameters since its pull request #32964 (2026), so it is spelled out.
+PAPER_CONFIGURED = {"linear_regression": lambda seed: LinearRegression(),
+                    "svr": lambda seed: SVR(kernel="linear"),
+                    "decision_tree": lambda seed: DecisionTreeRegressor(random_state=seed),
+                    "gaussian_process": lambda seed: GaussianProcessRegressor(
+                        ConstantKernel(1.0, "fixed") * RBF(1.0, "fixed"), random_state=seed)}
 
 
 def _mean_sd(values, digits=4) -> str:
@@ -78,23 +102,49 @@ class CapacitiveProbe:
         with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
             return {name: compose("config", overrides=[f"model={name}"]).model for name in MODELS}
 
-    def fit(self, protocol: str, seed: int, name: str) -> dict:
-        """Model `name` fitted under `protocol` on seed `seed`'s table (once; kept): its test R²,
-        RMSE (N) and correlation factor (counts/N), and its predictions on the force sweep."""
-        key = (protocol, seed, name)
+    def fit(self, protocol: str, seed: int, name: str, configuration: str = "project") -> dict:
+        """Model `name` in `configuration` fitted under `protocol` on seed `seed`'s table (once;
+        kept): its test R², RMSE (N) and correlation factor (counts/N), and its predictions on the
+        force sweep."""
+        key = (configuration, protocol, seed, name)
         if key not in self._fits:
             table = self.tables[seed]
-            X, y = table.channels, table.frame["force_n"].to_numpy()
+            y = table.frame["force_n"].to_numpy()
             train, test = split(table, protocol, seed)
-            mean, scale = mean_and_scale(X[train])
-            model = instantiate(self.model_configs[name], seed=seed)
-            model.fit((X[train] - mean) / scale, y[train])
-            predicted = model.predict((X[test] - mean) / scale)
+            fitted = self._project_fit if configuration == "project" else self._paper_configured_fit
+            predicted, sweep = fitted(table, train, test, seed, name)
             self._fits[key] = {"r2": float(r2_score(y[test], predicted)),
                                "rmse": float(np.sqrt(np.mean((predicted - y[test]) ** 2))),
-                               "slope": correlation_factor_rmc_per_n(_pressed_cell(table)[test], predicted),
-                               "sweep": model.predict((self.sweep(seed).channels - mean) / scale)}
+                               "slope": correlation_factor_rmc_per_n(_pressed_cell_rmc(table)[test], predicted),
+                               "sweep": sweep}
         return self._fits[key]
+
+    def _project_fit(self, table, train, test, seed, name):
+        """The project's model config on the 36 cells, standardised on the training rows: test
+        and sweep predictions."""
+        X, y = table.channels, table.frame["force_n"].to_numpy()
+        mean, scale = mean_and_scale(X[train])
+        model = instantiate(self.model_configs[name], seed=seed)
+        model.fit((X[train] - mean) / scale, y[train])
+        return model.predict((X[test] - mean) / scale), model.predict((self.sweep(seed).channels - mean) / scale)
+
+    def _paper_configured_fit(self, table, train, test, seed, name):
+        """`PAPER_CONFIGURED[name]` per pressed cell, from that cell's RMC change alone: test
+        predictions (each test press by its own cell's model) and the sweep's cell's sweep."""
+        y, rmc = table.frame["force_n"].to_numpy(), _pressed_cell_rmc(table)
+        cell = _pressed_cell_index(table)
+        sweep = self.sweep(seed)
+        predicted, swept = np.empty(len(test)), None
+        for which in np.unique(cell):
+            with warnings.catch_warnings():     # the GP's defaults run its length scale into a bound
+                warnings.simplefilter("ignore", ConvergenceWarning)
+                model = PAPER_CONFIGURED[name](seed).fit(rmc[train][cell[train] == which, None],
+                                                         y[train][cell[train] == which])
+            here = cell[test] == which
+            predicted[here] = model.predict(rmc[test][here, None])
+            if which == _pressed_cell_index(sweep)[0]:
+                swept = model.predict(_pressed_cell_rmc(sweep)[:, None])
+        return predicted, swept
 
     @lru_cache(maxsize=None)
     def sweep(self, seed: int):
@@ -106,9 +156,10 @@ class CapacitiveProbe:
         scene = self.scene(seed, protocol="characterisation")
         return scene.simulate(np.zeros(SWEEP_PRESSES, dtype=int), np.repeat(cell, SWEEP_PRESSES, axis=0), force)
 
-    def per_model(self, protocol: str, key: str, models=MODELS) -> dict:
+    def per_model(self, protocol: str, key: str, models=MODELS, configuration: str = "project") -> dict:
         """model -> its `key` over the seeds."""
-        return {name: np.array([self.fit(protocol, seed, name)[key] for seed in self.seeds]) for name in models}
+        return {name: np.array([self.fit(protocol, seed, name, configuration)[key] for seed in self.seeds])
+                for name in models}
 
     @cached_property
     def tracking_study(self) -> dict:
@@ -160,9 +211,14 @@ def _seeds(probe) -> str:
     return f"{probe.seeds[0]}-{probe.seeds[-1]}" if len(probe.seeds) > 1 else str(probe.seeds[0])
 
 
-def _pressed_cell(table) -> np.ndarray:
+def _pressed_cell_rmc(table) -> np.ndarray:
     rows, cols = table.description["grid"]
     return pressed_cell_rmc(table.frame, rows, cols, table.description["pitch_mm"])
+
+
+def _pressed_cell_index(table) -> np.ndarray:
+    rows, cols = table.description["grid"]
+    return pressed_cell(table.frame, rows, cols, table.description["pitch_mm"])
 
 
 @observation("capacitive6x6", "2", "Limit of detection ≈ 0.1 N; the response is nearly linear over 0.1-3 N, "
@@ -170,7 +226,7 @@ def _pressed_cell(table) -> np.ndarray:
 def detection_limit_and_linearity(probe: CapacitiveProbe) -> Measured:
     lod, peak, line_r2 = [], [], []
     for seed, table in probe.tables.items():
-        rmc, force = _pressed_cell(table), table.frame["force_n"].to_numpy()
+        rmc, force = _pressed_cell_rmc(table), table.frame["force_n"].to_numpy()
         levels = np.asarray(probe.params["force_levels_n"])
         level = np.abs(force[:, None] - levels[None]).argmin(axis=1)
         means = np.array([rmc[level == k].mean() for k in range(len(levels))])
@@ -186,8 +242,8 @@ def detection_limit_and_linearity(probe: CapacitiveProbe) -> Measured:
                     {"lod_n": lod, "peak_counts": peak, "line_r2": line_r2})
 
 
-def _ranking_text(probe, protocol) -> str:
-    r2, rmse = probe.per_model(protocol, "r2"), probe.per_model(protocol, "rmse")
+def _ranking_text(probe, protocol, configuration="project") -> str:
+    r2, rmse = (probe.per_model(protocol, key, configuration=configuration) for key in ("r2", "rmse"))
     order = sorted(MODELS, key=lambda m: rmse[m].mean())
     return (f"{protocol}: " + ", ".join(f"{m} R² {_mean_sd(r2[m])} RMSE {_mean_sd(rmse[m])} N" for m in order))
 
@@ -210,13 +266,23 @@ def every_model_above_0_99(probe: CapacitiveProbe) -> Measured:
 @observation("capacitive6x6", "4a", "The decision tree is the best of the four models (Table 2)",
              "tree RMSE 0.0446-0.0585 N vs linear 0.10-0.15 N")
 def decision_tree_is_best(probe: CapacitiveProbe) -> Measured:
-    best = {}
-    for protocol in PROTOCOLS:
-        rmse = probe.per_model(protocol, "rmse")
-        best[protocol] = min(MODELS, key=lambda m: rmse[m].mean())
-    holds = best["paper"] == "decision_tree"
-    return Measured("; ".join(_ranking_text(probe, p) for p in PROTOCOLS) + f" (best first; seeds {_seeds(probe)})",
-                    holds, "decision tree lowest mean RMSE under the paper's split", {"best": best})
+    """Judged on the paper's configuration under the paper's split (the tree's RMSE below every
+    other model's on every seed); the project's models under both splits are reported beside it."""
+    best, tree_wins = {}, {}
+    for configuration in CONFIGURATIONS:
+        for protocol in PROTOCOLS:
+            rmse = probe.per_model(protocol, "rmse", configuration=configuration)
+            best[configuration, protocol] = min(MODELS, key=lambda m: rmse[m].mean())
+            tree_wins[configuration, protocol] = bool(all(np.all(rmse["decision_tree"] < rmse[m])
+                                                          for m in MODELS if m != "decision_tree"))
+    text = "; ".join(f"{configuration}, {_ranking_text(probe, p, configuration)}"
+                     for configuration in CONFIGURATIONS for p in PROTOCOLS)
+    return Measured(text + f" (best first; seeds {_seeds(probe)}; judged on the paper-configured models, one "
+                    "per sensor from its own reading with scikit-learn's defaults)",
+                    tree_wins["paper-configured", "paper"],
+                    "paper-configured, paper's split: the tree's RMSE below every other model's on every seed",
+                    {"best": {" / ".join(k): v for k, v in best.items()},
+                     "tree_wins": {" / ".join(k): v for k, v in tree_wins.items()}})
 
 
 @observation("capacitive6x6", "4b", "The decision tree's own accuracy: RMSE 0.0446-0.0585 N, mean R² 0.9996, "
@@ -239,19 +305,28 @@ def roughness(force: np.ndarray, predicted: np.ndarray) -> float:
 @observation("capacitive6x6", "5", "Decision tree and GPR predictions fluctuate (step-like / oscillating) where "
              "the linear models are smooth (sec. 3.5, Fig. 12)")
 def tree_and_gpr_fluctuate(probe: CapacitiveProbe) -> Measured:
-    rough = {name: [] for name in MODELS}
-    for seed in probe.seeds:
-        force = probe.sweep(seed).frame["force_n"].to_numpy()
-        for name in MODELS:
-            rough[name].append(roughness(force, probe.fit("paper", seed, name)["sweep"]))
-    mean = {name: float(np.mean(v)) for name, v in rough.items()}
-    smooth = max(mean["linear_regression"], mean["svr"])
-    ratio = {name: mean[name] / smooth for name in ("decision_tree", "gaussian_process")}
-    holds = all(r > 2.0 for r in ratio.values())
-    return Measured(f"rms departure from a cubic over a {SWEEP_PRESSES}-press sweep 0.1-3 N (paper's split): " +
-                    ", ".join(f"{n} {_mean_sd(v)} N" for n, v in rough.items()) +
-                    f"; tree / linear {ratio['decision_tree']:.1f}, GPR / linear {ratio['gaussian_process']:.1f}",
-                    holds, "tree and GPR each > 2 x the rougher linear model", {"roughness": mean, "ratio": ratio})
+    """Judged on the paper-configured models under the paper's split: the tree and the GPR each
+    more than twice as rough as the rougher linear model while still accurate (test R² > 0.99,
+    as every model of the paper's Table 2 is); the project's models are reported beside them."""
+    ratio, accurate, parts = {}, {}, []
+    for configuration in CONFIGURATIONS:
+        rough = {name: np.array([roughness(probe.sweep(seed).frame["force_n"].to_numpy(),
+                                           probe.fit("paper", seed, name, configuration)["sweep"])
+                                 for seed in probe.seeds]) for name in MODELS}
+        r2 = probe.per_model("paper", "r2", configuration=configuration)
+        smooth = max(rough["linear_regression"].mean(), rough["svr"].mean())
+        ratio[configuration] = {n: float(rough[n].mean() / smooth) for n in ("decision_tree", "gaussian_process")}
+        accurate[configuration] = {n: bool(r2[n].mean() > 0.99) for n in ("decision_tree", "gaussian_process")}
+        parts.append(f"{configuration}: " + ", ".join(f"{n} {_mean_sd(v)} N" for n, v in rough.items()) +
+                     f"; tree / linear {ratio[configuration]['decision_tree']:.1f}, GPR / linear "
+                     f"{ratio[configuration]['gaussian_process']:.1f} (GPR test R² "
+                     f"{_mean_sd(r2['gaussian_process'])})")
+    holds = all(ratio["paper-configured"][n] > 2.0 and accurate["paper-configured"][n]
+                for n in ("decision_tree", "gaussian_process"))
+    return Measured(f"rms departure from a cubic over a {SWEEP_PRESSES}-press sweep 0.1-3 N (paper's split, seeds "
+                    f"{_seeds(probe)}): " + "; ".join(parts) + " (judged on the paper-configured models)", holds,
+                    "paper-configured: tree and GPR each > 2 x the rougher linear model, with test R² > 0.99",
+                    {"ratio": ratio, "accurate": accurate})
 
 
 @observation("capacitive6x6", "6", "Jaccard cluster tracking keeps labels consistent over time while contacts "
