@@ -242,3 +242,11 @@ def test_learned_mlp_never_trains_on_the_sensor_under_test_and_is_deterministic(
     assert np.array_equal(again.predict(cal.channels), model.predict(cal.channels))
     other = fit_reconstruction("learned_mlp", cfg, 4, cal.channels, cal.targets, MLP)   # another seed: another net
     assert not np.array_equal(other.predict(cal.channels), model.predict(cal.channels))
+
+
+def test_learned_mlp_trains_on_greits_simulated_presses_reduced_sensor_by_sensor(learned_mlp_and_calibration):
+    _, _, model = learned_mlp_and_calibration
+    readings, targets = model._training_readings()
+    voltages, expected = model._simulator().training_frames()          # all training sensors at once
+    assert np.array_equal(targets, expected)
+    assert np.allclose(readings, (transfer_basis(model.geometry).T @ voltages.T).T, rtol=1e-12, atol=0)
