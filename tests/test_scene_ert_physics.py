@@ -149,6 +149,9 @@ def test_two_point_indenters_placed_by_hand_move_the_readings_not_the_marks():
     assert moved.shape == test.channels.shape and not np.allclose(moved, test.channels)
     assert np.array_equal(moved, placed_by_hand(two, test, 2.0))
     assert np.allclose(placed_by_hand(two, test, 1e-12), test.channels, atol=1e-9 * np.abs(test.channels).max())
+    from runs.studies.ert_tests import run_two_point
+    with pytest.raises(InputError, match="placement_sd_mm must be >= 0"):
+        run_two_point(None, "unused", None, placement_sd_mm=-1.0)
 
 
 @pytest.mark.parametrize("effects", [

@@ -225,6 +225,8 @@ def placed_by_hand(scene, test, sd_mm: float) -> np.ndarray:
 def run_two_point(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, reconstruction=None, n_repeats=10,
                   significance=0.05, placement_sd_mm=0.0) -> dict:
     """Two-point discrimination (the ERT study's §5.2, table 2) with the paired dip test (module docstring)."""
+    if placement_sd_mm < 0:
+        raise InputError(f"ert_two_point: placement_sd_mm must be >= 0, got {placement_sd_mm}")
     output_dir = Path(output_dir)
     tables, distances = [], {}
     for seed in seeds:
