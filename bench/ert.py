@@ -1,18 +1,24 @@
 """ERT skin benchmark (2 cores shared; OMP_NUM_THREADS=1): simulation frames/s with all 276
-injections, the time to build the full pattern's Jacobian, and the ONNX reconstruction per frame.
+injections and every effect the scene lists, the time to build the full pattern's Jacobian, and
+the ONNX reconstruction per frame.
 
     OMP_NUM_THREADS=1 .venv/bin/python bench/ert.py
-    OMP_NUM_THREADS=1 .venv/bin/python bench/ert.py --scenes ert_internal --frames 2000
+    OMP_NUM_THREADS=1 .venv/bin/python bench/ert.py --scenes ert_internal --frames 2000 --parts simulation
 
-Simulation: `random` presses through the scene's full effect list (and ert_minimal's), the
-sensor's solver already built (it is cached per process; its one-off build is reported apart).
+Simulation: `random` presses through the scene's full effect list, the sensor's press solver
+already built (cached per process; its one-off build, the resting sheet's dense inverse, is
+reported apart); frames/s is the mean +- sd
+of --repeats whole generate() calls (presses, effects, readings, the checked SensorTable).
 Jacobian: TikhonovReconstruction.jacobian() from scratch (the dense baseline inverse, the adjoint
-sensitivities, the four-terminal map), and the sensitivity of the transfer matrix's 276 unique
-entries alone (models/ert/readings.py, what Gauss-Newton uses). Reconstruction: onnxruntime,
-batch 1, one thread, median of --calls calls, for Tikhonov, Gauss-Newton (20 x 20 pixels) and
-GREIT (48 x 48); the fits use a small calibration (its size does not change the graphs).
+sensitivities, the four-terminal map), mean +- sd of --repeats, and the sensitivity of the
+transfer matrix's 276 unique entries alone (models/ert/readings.py, what Gauss-Newton uses).
+Reconstruction: onnxruntime, batch 1, one thread, median of --calls calls, for Tikhonov,
+Gauss-Newton (20 x 20 pixels) and GREIT (48 x 48); the fits use a small calibration (its size
+does not change the graphs). Each row ends with the 1-minute load average before and after it:
+beside other jobs every time grows with the share of a core the bench does not get.
 """
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
@@ -43,65 +49,82 @@ def scene(name: str, **overrides):
     return instantiate(scene_node(name, **overrides))
 
 
+def mean_sd(values) -> str:
+    digits = 2 if np.mean(values) < 10 else 0
+    sd = np.std(values, ddof=1) if len(values) > 1 else 0.0
+    return f"{np.mean(values):.{digits}f} +- {sd:.{digits}f}"
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--scenes", nargs="*", default=["ert_boundary", "ert_internal", "ert_minimal"])
-    parser.add_argument("--frames", type=int, default=1000)
+    parser.add_argument("--scenes", nargs="*", default=["ert_boundary", "ert_internal", "ert_physical_boundary",
+                                                       "ert_physical_internal", "ert_minimal"])
+    parser.add_argument("--frames", type=int, default=2000)
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--calls", type=int, default=2000)
+    parser.add_argument("--parts", nargs="*", default=["simulation", "jacobian", "onnx"],
+                        choices=["simulation", "jacobian", "onnx"])
     args = parser.parse_args(argv)
     import onnxruntime as ort
 
-    print("| scene | solver build (s, once) | frames/s (276 injections x 24) | Jacobian (s) "
-          "| Jacobian via Z (s, 20 x 20) | ONNX per frame (ms, p50): Tikhonov | Gauss-Newton | GREIT (48 x 48) |")
-    print("|---|---|---|---|---|---|---|---|")
+    print(f"| scene | solver build (s, once) | frames/s ({args.frames} presses, mean +- sd of {args.repeats}) "
+          "| Jacobian (s) | Jacobian via Z (s, 20 x 20) | ONNX per frame (ms, p50): Tikhonov | Gauss-Newton "
+          "| GREIT (48 x 48) | load before / after |")
+    print("|---|---|---|---|---|---|---|---|---|")
     for name in args.scenes:
-        ert.sheet_solver.cache_clear()
+        load_before = os.getloadavg()[0]
+        cells = {"build": "", "fps": "", "jacobian": "", "via_z": "", "tikhonov": "", "gauss_newton": "", "greit": ""}
         s = scene(name, protocol="random", n_samples=args.frames)
-        start = time.perf_counter()
-        s._solver(s.sensor())
-        build_s = time.perf_counter() - start
-        best = float("inf")
-        for _ in range(args.repeats):
+        if "simulation" in args.parts:
+            ert.sheet_solver.cache_clear()
             start = time.perf_counter()
-            s.generate()
-            best = min(best, time.perf_counter() - start)
-        fps = args.frames / best
-
-        model = TikhonovReconstruction(geometry=s.geometry(), alpha_relative=(1e-3,))
-        start = time.perf_counter()
-        jacobian = model.jacobian()
-        jacobian_s = time.perf_counter() - start
-        cal = scene(name, protocol="calibration", grid_points_per_side=6, n_force_levels=2).generate()
-        model.fit(cal.channels, cal.targets)
-        options = ort.SessionOptions()
-        options.intra_op_num_threads = 1
-        frame = cal.channels[:1].astype(np.float32)
-
-        def onnx_ms(proto):
-            session = ort.InferenceSession(proto.SerializeToString(), options, providers=["CPUExecutionProvider"])
-            for _ in range(50):
-                session.run(["prediction"], {"voltages": frame})
-            times = []
-            for _ in range(args.calls):
+            s.transfer_resistance(np.zeros((1, 1, 3)))        # the first press builds the dense inverse
+            cells["build"] = f"{time.perf_counter() - start:.2f}"
+            fps = []
+            for _ in range(args.repeats):
                 start = time.perf_counter()
-                session.run(["prediction"], {"voltages": frame})
-                times.append(time.perf_counter() - start)
-            return 1e3 * np.median(times)
-
+                s.generate()
+                fps.append(args.frames / (time.perf_counter() - start))
+            cells["fps"] = mean_sd(fps)
         geometry = s.geometry()
-        start = time.perf_counter()
-        pixel_sensitivity(geometry, 20)
-        sensitivity_s = time.perf_counter() - start
-        gauss_newton = GaussNewtonReconstruction(geometry=geometry, lambdas_relative=(1e-3,)).fit(cal.channels, cal.targets)
-        # the graph's size does not depend on how many presses GREIT trained on
-        greit = GreitReconstruction(geometry=geometry, training_scene=scene_node(name), n_training_sensors=1,
-                                    presses_per_sensor=50, desired_radius_mm=(20.0,),
-                                    noise_weights=(1e-3,)).fit(cal.channels, cal.targets)
-        print(f"| {name} | {build_s:.2f} | {fps:.0f} | {jacobian_s:.2f} ({jacobian.shape[0]} x {jacobian.shape[1]}) "
-              f"| {sensitivity_s:.2f} | {onnx_ms(tikhonov_to_onnx(model)):.3f} "
-              f"| {onnx_ms(linear_image_to_onnx(gauss_newton)):.3f} | {onnx_ms(linear_image_to_onnx(greit)):.3f} |",
-              flush=True)
+        if "jacobian" in args.parts:
+            seconds = []
+            for _ in range(args.repeats):
+                model = TikhonovReconstruction(geometry=geometry, alpha_relative=(1e-3,))
+                start = time.perf_counter()
+                jacobian = model.jacobian()
+                seconds.append(time.perf_counter() - start)
+            cells["jacobian"] = f"{mean_sd(seconds)} ({jacobian.shape[0]} x {jacobian.shape[1]})"
+            start = time.perf_counter()
+            pixel_sensitivity(geometry, 20)
+            cells["via_z"] = f"{time.perf_counter() - start:.2f}"
+        if "onnx" in args.parts:
+            model = TikhonovReconstruction(geometry=geometry, alpha_relative=(1e-3,))
+            cal = scene(name, protocol="calibration", grid_points_per_side=6, n_force_levels=2).generate()
+            model.fit(cal.channels, cal.targets)
+            options = ort.SessionOptions()
+            options.intra_op_num_threads = 1
+            frame = cal.channels[:1].astype(np.float32)
+
+            def onnx_ms(proto):
+                session = ort.InferenceSession(proto.SerializeToString(), options, providers=["CPUExecutionProvider"])
+                for _ in range(50):
+                    session.run(["prediction"], {"voltages": frame})
+                times = []
+                for _ in range(args.calls):
+                    start = time.perf_counter()
+                    session.run(["prediction"], {"voltages": frame})
+                    times.append(time.perf_counter() - start)
+                return f"{1e3 * np.median(times):.3f}"
+
+            gauss_newton = GaussNewtonReconstruction(geometry=geometry, lambdas_relative=(1e-3,)).fit(cal.channels, cal.targets)
+            # the graph's size does not depend on how many presses GREIT trained on
+            greit = GreitReconstruction(geometry=geometry, training_scene=scene_node(name), n_training_sensors=1,
+                                        presses_per_sensor=50, desired_radius_mm=(20.0,),
+                                        noise_weights=(1e-3,)).fit(cal.channels, cal.targets)
+            cells.update(tikhonov=onnx_ms(tikhonov_to_onnx(model)), gauss_newton=onnx_ms(linear_image_to_onnx(gauss_newton)),
+                         greit=onnx_ms(linear_image_to_onnx(greit)))
+        print(f"| {name} | {' | '.join(cells.values())} | {load_before:.1f} / {os.getloadavg()[0]:.1f} |", flush=True)
 
 
 if __name__ == "__main__":

@@ -19,6 +19,7 @@ width (rubber12's edge electrodes); one inside the sheet covers every node withi
 width (a point electrode, width 0, takes its nearest node).
 """
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -143,12 +144,17 @@ class SheetSolver:
         `node_conductance_s` is the sheet conductance of every node (siemens per square),
         shape (n_nodes**2,); it must be positive everywhere.
         """
-        g = self.edge_conductance_s(node_conductance_s)
-        laplacian = (self._incidence.T @ sp.diags(g) @ self._incidence).tocsc()
-        potentials = splu(laplacian).solve(self._rhs)
+        potentials = self.unit_potentials(node_conductance_s)
         z = np.zeros((self.n_electrodes, self.n_electrodes))
         z[:-1, :-1] = potentials[: self.n_electrodes - 1]
         return z
+
+    def unit_potentials(self, node_conductance_s: np.ndarray) -> np.ndarray:
+        """(n_unknowns - 1, n_electrodes - 1) potentials of every free unknown for a unit current
+        into each electrode but the grounded last one (one sparse LU)."""
+        g = self.edge_conductance_s(node_conductance_s)
+        laplacian = (self._incidence.T @ sp.diags(g) @ self._incidence).tocsc()
+        return splu(laplacian).solve(self._rhs)
 
 
 def pair_resistance_ohm(z: np.ndarray, pairs: np.ndarray) -> np.ndarray:
@@ -225,22 +231,31 @@ class PatchUpdateSolver:
         n_free = solver._free.size
         base_nodes = np.broadcast_to(np.asarray(base_conductance_s, dtype=float), (solver.grid.n_nodes ** 2,))
         self._base_nodes = base_nodes
-        g0 = solver.edge_conductance_s(base_nodes)
-        self._base_edges = g0
-        laplacian = (solver._incidence.T @ sp.diags(g0) @ solver._incidence).toarray()
-        # One extra row/column of zeros stands for the grounded electrode (potential 0): an
-        # edge into it changes only its other end's row, which the zeros reproduce exactly.
-        inverse = np.zeros((n_free + 1, n_free + 1))
-        inverse[:n_free, :n_free] = np.linalg.inv(laplacian)
-        self._inverse = inverse
+        self._base_edges = solver.edge_conductance_s(base_nodes)
         # Endpoints of every edge in the free-unknown numbering (ground -> n_free).
         incidence = solver._incidence.tocoo()
         ends = np.full((incidence.shape[0], 2), n_free)
         ends[incidence.row, np.where(incidence.data > 0, 0, 1)] = incidence.col
         self._ends = ends
         self._n = n_free + 1
-        self._z0 = inverse[: solver.n_electrodes - 1, : solver.n_electrodes - 1].copy()
         self._build_cells()
+
+    @cached_property
+    def _inverse(self) -> np.ndarray:
+        """The resting sheet's dense L0^-1 (free unknowns), built on the first press: the
+        sensitivities need only its electrode columns. One extra row/column of zeros stands for
+        the grounded electrode (potential 0): an edge into it changes only its other end's row,
+        which the zeros reproduce exactly."""
+        s = self.solver
+        laplacian = (s._incidence.T @ sp.diags(self._base_edges) @ s._incidence).toarray()
+        inverse = np.zeros((self._n, self._n))
+        inverse[:-1, :-1] = np.linalg.inv(laplacian)
+        return inverse
+
+    @cached_property
+    def _z0(self) -> np.ndarray:
+        m = self.solver.n_electrodes - 1
+        return self._inverse[:m, :m].copy()
 
     def _build_cells(self):
         """The 3 x 3-node cells between grid lines every 4 nodes that hold no electrode node:
@@ -378,7 +393,8 @@ class PatchUpdateSolver:
         d/d g_p = w 2 g_q^2 / (g_p + g_q)^2, which the chain rule carries to theta.
         """
         s, m = self.solver, self.solver.n_electrodes - 1
-        potentials = self._inverse[:, :m]                        # ground row is zero
+        potentials = np.zeros((self._n, m))                       # ground row is zero
+        potentials[:-1] = s.unit_potentials(self._base_nodes)
         a, b = self._ends[:, 0], self._ends[:, 1]
         drop = potentials[a] - potentials[b]                      # (n_edges, m)
         gp, gq = self._base_nodes[s.edges[:, 0]], self._base_nodes[s.edges[:, 1]]
@@ -386,9 +402,11 @@ class PatchUpdateSolver:
         dg_dgq = s.edge_weight * 2.0 * gp ** 2 / (gp + gq) ** 2
         weight = np.asarray(node_to_parameter, dtype=float)
         d_edge = (dg_dgp * gp)[:, None] * weight[s.edges[:, 0]] + (dg_dgq * gq)[:, None] * weight[s.edges[:, 1]]
-        outer = (drop[:, :, None] * drop[:, None, :]).reshape(len(drop), m * m)
+        i, j = np.triu_indices(m)                                 # dZ is symmetric: one triangle
+        upper = -(d_edge.T @ (drop[:, i] * drop[:, j]))
         dz = np.zeros((weight.shape[1], m + 1, m + 1))
-        dz[:, :m, :m] = -(d_edge.T @ outer).reshape(-1, m, m)
+        dz[:, i, j] = upper
+        dz[:, j, i] = upper
         return dz
 
 
