@@ -278,7 +278,7 @@ def decision_tree_is_best(probe: CapacitiveProbe) -> Measured:
     text = "; ".join(f"{configuration}, {_ranking_text(probe, p, configuration)}"
                      for configuration in CONFIGURATIONS for p in PROTOCOLS)
     return Measured(text + f" (best first; seeds {_seeds(probe)}; judged on the paper-configured models, one "
-                    "per sensor from its own reading with scikit-learn's defaults)",
+                    "per sensor from its own reading with scikit-learn 1.2.2's defaults)",
                     tree_wins["paper-configured", "paper"],
                     "paper-configured, paper's split: the tree's RMSE below every other model's on every seed",
                     {"best": {" / ".join(k): v for k, v in best.items()},
