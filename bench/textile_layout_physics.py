@@ -49,6 +49,8 @@ VARIANTS = {
     "restoring_per_point": (RESTORING, (), PER_POINT),
     "restoring_per_point_anisotropy_2": ({**RESTORING, "fabric_anisotropy": {"ratio": 2.0}}, (), PER_POINT),
     "restoring_per_point_electrode_error_5mm": ({**RESTORING, "electrode_position_error": {"sd_mm": 5.0}}, (), PER_POINT),
+    "physical_restoring_per_point": ({**PHYSICAL, **RESTORING, "electrode_contact_impedance": {"restoring_presses": 10.0}},
+                                     ("contact_resistance", "hysteresis"), PER_POINT),
     "restoring_per_point_noise_x5": ({**RESTORING, "adc_noise": {"noise_v": 1.0e-3, "bits": 24, "full_scale_v": 10.0}}, (),
                                      PER_POINT),
     "restoring_per_point_same_alpha_1e-3": (RESTORING, (), PER_POINT, {"alpha_relative": [1.0e-3]}),
