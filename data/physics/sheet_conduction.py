@@ -283,19 +283,28 @@ class PatchUpdateSolver:
         wanted = np.sort(np.stack([nodes[:, pairs[:, 0]], nodes[:, pairs[:, 1]]], axis=-1), axis=-1) @ np.array([n * n, 1])
         self._cell_edges = sorter[np.searchsorted(key, wanted, sorter=sorter)]               # (cells, 24)
         self._cell_interior, self._cell_ring = free[nodes[:, :9]], free[nodes[:, 9:]]
-        pattern = np.zeros((len(pairs), 21, 21))
-        k = np.arange(len(pairs))
-        pattern[k, pairs[:, 0], pairs[:, 0]] = pattern[k, pairs[:, 1], pairs[:, 1]] = 1.0
-        pattern[k, pairs[:, 0], pairs[:, 1]] = pattern[k, pairs[:, 1], pairs[:, 0]] = -1.0
+        # the interior block of the cell's Laplacian as a linear map of its 24 edge conductances;
+        # each ring node hangs on one edge (the last 12) from one interior node
+        pattern = np.zeros((len(pairs), 9, 9))
+        for k, (a, b) in enumerate(pairs):
+            pattern[k, a, a] += 1.0
+            if b < 9:
+                pattern[k, b, b] += 1.0
+                pattern[k, a, b] = pattern[k, b, a] = -1.0
         self._cell_pattern = pattern.reshape(len(pairs), -1)
+        self._cell_hook = pairs[12:, 0]
         self._edge_cell = np.full(len(s.edges), -1)
         self._edge_cell[self._cell_edges] = np.arange(len(nodes))[:, None]
         self._cell_schur0 = self._cell_schur(self._base_edges[self._cell_edges])
 
     def _cell_schur(self, edge_conductance: np.ndarray) -> np.ndarray:
-        """(k, 12, 12) Schur complements onto the ring of cells with these (k, 24) edge conductances."""
-        lap = (edge_conductance @ self._cell_pattern).reshape(-1, 21, 21)
-        return lap[:, 9:, 9:] - lap[:, 9:, :9] @ np.linalg.solve(lap[:, :9, :9], lap[:, :9, 9:])
+        """(k, 12, 12) Schur complements onto the ring of cells with these (k, 24) edge conductances:
+        diag(g) - g g^T * L_II^-1[hook, hook], g the ring edges' conductances."""
+        interior = np.linalg.inv((edge_conductance @ self._cell_pattern).reshape(-1, 9, 9))
+        ring = edge_conductance[:, 12:]
+        schur = -(ring[:, :, None] * ring[:, None, :]) * interior[:, self._cell_hook[:, None], self._cell_hook[None, :]]
+        schur[:, np.arange(12), np.arange(12)] += ring
+        return schur
 
     def transfer_resistance(self, node_conductance_s: np.ndarray, chunk: int = 256) -> np.ndarray:
         """(n_presses, n_electrodes, n_electrodes) Z for (n_presses, n_nodes) conductance maps,
@@ -359,8 +368,11 @@ class PatchUpdateSolver:
         slot = np.full(len(g), -1)
         slot[order] = np.arange(len(order))
         entry_slot = slot[entry_press]
-        by_slot = np.argsort(entry_slot, kind="stable")
-        bounds = np.searchsorted(entry_slot[by_slot], np.arange(0, len(order) + chunk, chunk))
+        # entries grouped by chunk (a small integer key: numpy's stable sort is then a radix sort)
+        n_chunks = -(-len(order) // chunk)
+        entry_chunk = (entry_slot // chunk).astype(np.int16 if n_chunks < 2 ** 15 else np.int64)
+        by_chunk = np.argsort(entry_chunk, kind="stable")
+        bounds = np.searchsorted(entry_chunk[by_chunk], np.arange(n_chunks + 1))
         flat_inverse = self._inverse.ravel()
         for k, start in enumerate(range(0, len(order), chunk)):
             part = order[start:start + chunk]
@@ -371,7 +383,7 @@ class PatchUpdateSolver:
             nodes = np.argsort(~touched[part], axis=1, kind="stable")[:, :v]
             local = np.zeros((len(part), width), dtype=np.int64)
             np.put_along_axis(local, nodes, np.arange(v)[None], axis=1)
-            e = by_slot[bounds[k]:bounds[k + 1]]
+            e = by_chunk[bounds[k]:bounds[k + 1]]
             p = entry_slot[e] - start
             dL = np.bincount((p * v + local[p, entry_i[e]]) * v + local[p, entry_j[e]], weights=entry_value[e],
                              minlength=len(part) * v * v).reshape(len(part), v, v)
