@@ -24,7 +24,6 @@ sensor's own reading (Table 2's rows, Fig. 18's force-RMC axes), so each pressed
 own four models with its RMC change as the one feature, on the same train and test presses.
 """
 import os
-import warnings
 from functools import cached_property, lru_cache
 from pathlib import Path
 
@@ -32,7 +31,6 @@ import numpy as np
 from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
-from sklearn.exceptions import ConvergenceWarning
 from sklearn.gaussian_process import GaussianProcessRegressor
 from sklearn.gaussian_process.kernels import RBF, ConstantKernel
 from sklearn.linear_model import LinearRegression
@@ -136,10 +134,8 @@ class CapacitiveProbe:
         sweep = self.sweep(seed)
         predicted, swept = np.empty(len(test)), None
         for which in np.unique(cell):
-            with warnings.catch_warnings():     # the GP's defaults run its length scale into a bound
-                warnings.simplefilter("ignore", ConvergenceWarning)
-                model = PAPER_CONFIGURED[name](seed).fit(rmc[train][cell[train] == which, None],
-                                                         y[train][cell[train] == which])
+            model = PAPER_CONFIGURED[name](seed).fit(rmc[train][cell[train] == which, None],
+                                                     y[train][cell[train] == which])
             here = cell[test] == which
             predicted[here] = model.predict(rmc[test][here, None])
             if which == _pressed_cell_index(sweep)[0]:
