@@ -1,13 +1,17 @@
 """The rubber12 paper's validation weights vs stacking, beside each candidate alone, over several seeds.
 
     .venv/bin/python bench/blend_weights.py [--seeds 0 1 2] [overrides ...]
-    (default overrides: scene.protocol=random scene.n_samples=2000)
+    (default overrides: model=blend scene.protocol=random scene.n_samples=2000)
+    .venv/bin/python bench/blend_weights.py model=blend scene.protocol=lab scene.n_samples=450   # the paper's 450 lab presses
 
 Per seed: the default blend's three K-fold candidates are fitted once on the training split;
 the paper's weights (eq. 18-20, from validation R^2) and the stacking weights (super learner on
 the out-of-fold predictions, guarded on validation) are computed from the same fitted
 candidates, so the comparison isolates the weighting. Prints validation and test R^2 per target
-as mean ± sd over seeds. Weights are chosen on validation; test is for reporting only.
+as mean ± sd over seeds, and which candidate scores best on validation per target at each seed
+(the rubber12 paper's §IV-E: extra trees, weights 0, 0, 1). Weights are chosen on validation;
+test is for reporting only. The split is the datamodule's (grouped by default: all repeats of a
+position-depth pair on one side, so no press is in both training and validation).
 """
 import argparse
 import sys
@@ -22,9 +26,10 @@ from sklearn.metrics import r2_score
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.threads import apply_threads, resolve_threads  # noqa: E402
 from runs.run import seed_everything  # noqa: E402
 
-DEFAULT = ["scene.protocol=random", "scene.n_samples=2000"]
+DEFAULT = ["model=blend", "scene.protocol=random", "scene.n_samples=2000"]
 
 
 def scores(y, predicted) -> np.ndarray:
@@ -35,6 +40,7 @@ def one_seed(seed: int, overrides: list[str]) -> dict:
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
         cfg = compose("config", overrides=["scene.progress=false", "trainer.progress=false", f"seed={seed}",
                                             *overrides])
+    apply_threads(resolve_threads(cfg.threads))   # the run's setting (1 by default): no idle torch threads spinning
     seed_everything(seed)
     datamodule = instantiate(cfg.data).setup()
     (X, y), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
@@ -75,6 +81,11 @@ def main(argv=None):
             values = np.array([r[name][split] for r in results])
             cells = [f"{m:.4f} ± {s:.4f}" for m, s in zip(values.mean(axis=0), values.std(axis=0, ddof=1))]
             print(f"| {name} | {'validation' if split == 'val' else 'test'} | " + " | ".join(cells) + " |")
+    validation = np.array([[r[name]["val"] for name in candidates] for r in results])   # seeds x candidates x targets
+    winners = validation.argmax(axis=1)
+    print("\nbest candidate on validation per target, seed by seed (" + ", ".join(map(str, args.seeds)) + ")")
+    for k, target in enumerate(targets):
+        print(f"{target}: " + ", ".join(candidates[w] for w in winners[:, k]))
     paper = np.array([r["weights"]["paper"] for r in results]).mean(axis=0)
     stacking = np.array([r["weights"]["stacking"] for r in results]).mean(axis=0)
     print("\nmean weights over seeds (rows: " + ", ".join(candidates) + "; columns: " + ", ".join(targets) + ")")

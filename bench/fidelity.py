@@ -29,7 +29,8 @@ from sklearn.ensemble import ExtraTreesRegressor  # noqa: E402
 from sklearn.metrics import r2_score  # noqa: E402
 
 from runs.fidelity.observations import (  # noqa: E402
-    CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, run_checks, scene_params, seeds_label)
+    SEEDS, CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, mean_sd, run_checks, scene_params,
+    seeds_label)
 from runs.fidelity.rubber12 import (  # noqa: E402
     SceneProbe,
     centre_widest_range,
@@ -48,20 +49,20 @@ PATTERNS = {"adjacent": "adjacent", "i vs i+3": [[i, (i + 2) % 12 + 1] for i in 
 
 def compare_patterns(config: str, overrides, repeats: int) -> str:
     """The sensitivity rows (4, 5), the mirror row (6) and the forest's x, y R^2 (11) for each
-    readout pattern on the same scene, each the mean over the rows' seeds."""
-    lines = [("| readout | channels | sensitivity per mm: corners / edge mid / centre (row 4) | "
-              "P5 span / best span (row 5) | mirror ambiguity edge / centre (row 6) | R² x, y (row 11, seeds 0-2) | "
-              f"R² x / y / depth, random presses ({RANDOM_PRESSES}, seeds 0-2, mean ± sd) |"),
+    readout pattern on the same scene, each as mean ± sd over the rows' seeds."""
+    lines = [(f"| readout (every column: {seeds_label(SEEDS)}, mean ± sd) | channels | "
+              "sensitivity per mm: corners / edge mid / centre (row 4) | P5 span / best span (row 5) | mirror ambiguity edge / centre (row 6) | R² x, y (row 11) | "
+              f"R² x / y / depth, random presses ({RANDOM_PRESSES}) |"),
              "|---|---|---|---|---|---|---|"]
     params = scene_params(config, overrides)
     for name, pattern in PATTERNS.items():
         probe = SceneProbe({**params, "measurement": pattern}, repeats=repeats)
-        four, five = corners_least_sensitive(probe).numbers, centre_widest_range(probe).numbers
-        six, r2 = mirror_ambiguity_worst_at_edges(probe).numbers, extra_trees_r2(probe).numbers
-        lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {100 * four['corner_mean']:.2f} / "
-                     f"{100 * four['edge_mean']:.2f} / {100 * four['centre']:.2f} % | "
-                     f"{five['range'][4] / max(five['range']):.2f} | {six['edge']:.3f} / {six['centre']:.3f} | "
-                     f"{r2['r2'][0]:.3f} ± {r2['r2_sd'][0]:.3f}, {r2['r2'][1]:.3f} ± {r2['r2_sd'][1]:.3f} | "
+        four, five = corners_least_sensitive(probe).numbers["by_seed"], centre_widest_range(probe).numbers["by_seed"]
+        six, r2 = mirror_ambiguity_worst_at_edges(probe).numbers["by_seed"], np.array(extra_trees_r2(probe).numbers["by_seed"])
+        sensitivity = " / ".join(mean_sd(100 * np.array(four[k])) for k in ("corner_mean", "edge_mean", "centre"))
+        p5_share = np.array(five["range"])[:, 4] / np.max(five["range"], axis=1)
+        lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {sensitivity} % | {mean_sd(p5_share)} | "
+                     f"{mean_sd(six['edge'], 3)} / {mean_sd(six['centre'], 3)} | {mean_sd(r2[:, 0], 3)}, {mean_sd(r2[:, 1], 3)} | "
                      f"{_random_press_r2(params, pattern)} |")
     return "\n".join(lines)
 
@@ -70,10 +71,10 @@ RANDOM_PRESSES = 1500
 
 
 def _random_press_r2(params, pattern) -> str:
-    """Extra trees (100, physics features) on uniformly drawn presses, random 15 % hold-out, three
-    seeds: how well a pattern localises away from the lab's nine points."""
+    """Extra trees (100, physics features) on uniformly drawn presses, random 15 % hold-out, at each
+    seed: how well a pattern localises away from the lab's nine points."""
     scores = []
-    for seed in range(3):
+    for seed in SEEDS:
         probe = SceneProbe({**params, "measurement": pattern, "seed": seed})
         table = probe.scene(n_samples=RANDOM_PRESSES, protocol="random").generate()
         features, targets = compute_features(table.channels, FEATURE_GROUPS), table.targets
@@ -81,8 +82,7 @@ def _random_press_r2(params, pattern) -> str:
         train = np.setdiff1d(np.arange(len(targets)), test)
         forest = ExtraTreesRegressor(n_estimators=100, random_state=seed, n_jobs=1).fit(features[train], targets[train])
         scores.append(r2_score(targets[test], forest.predict(features[test]), multioutput="raw_values")[:3])
-    mean, sd = np.mean(scores, axis=0), np.std(scores, axis=0, ddof=1)
-    return " / ".join(f"{m:.3f} ± {s:.3f}" for m, s in zip(mean, sd))
+    return " / ".join(mean_sd(column, 3) for column in np.array(scores).T)
 
 
 def scene_section(scene: str, args) -> tuple[str, int, int, int]:

@@ -201,7 +201,8 @@ def corners_least_sensitive(probe: SceneProbe) -> Measured:
                              mean[CORNERS].max() < mean[CENTRE], "every corner below P5", probe.seeds,
                              {"corner_max": float(mean[CORNERS].max()), "corner_mean": float(mean[CORNERS].mean()),
                               "centre": float(mean[CENTRE]), "edge_mean": float(mean[EDGE_MIDPOINTS].mean()),
-                              "by_seed": {"corner_max": corners.max(axis=1).tolist(), "centre": centre.tolist()}})
+                              "by_seed": {"corner_max": corners.max(axis=1).tolist(), "corner_mean": corners.mean(axis=1).tolist(),
+                                          "edge_mean": edges.mean(axis=1).tolist(), "centre": centre.tolist()}})
 
 
 @observation("rubber12", "5", "The centre (P5) has the widest dynamic range and the highest "
@@ -225,7 +226,8 @@ def centre_widest_range(probe: SceneProbe) -> Measured:
         + "/".join(f"P{i + 1}" for i in dynamic_range.argmax(axis=1)) + ", highest SNR at "
         + "/".join(f"P{i + 1}" for i in snr.argmax(axis=1)) + ")",
         at_seed, top_range == CENTRE and top_snr == CENTRE, "P5 largest of P1-P9 in both", probe.seeds,
-        {"range": dynamic_range.mean(axis=0).tolist(), "snr": snr.mean(axis=0).tolist()})
+        {"range": dynamic_range.mean(axis=0).tolist(), "snr": snr.mean(axis=0).tolist(),
+         "by_seed": {"range": dynamic_range.tolist(), "snr": snr.tolist()}})
 
 
 @observation("rubber12", "6", "Mirror-image positions give similar patterns; the ambiguity is worst near "
