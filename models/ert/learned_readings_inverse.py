@@ -114,7 +114,7 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
 
     def __init__(self, geometry=None, training_scene=None, patch_mm=20.0, foam_spread_sd_mm=None,
                  n_training_sensors=40, presses_per_sensor=1000, training_force_range_n=(1.0, 15.0),
-                 training_seed=20_000, noise_weights=(1e-5, 1e-4, 1e-3), half_width_patches=2, width=128,
+                 training_seed=20_000, noise_weights=(1e-6, 1e-5, 1e-4), half_width_patches=2, width=128,
                  epochs=30, batch_size=256, learning_rate=3e-3, quantification_limit_n=2.0, seed=0):
         self.geometry = geometry
         self.training_scene = training_scene
