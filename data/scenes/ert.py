@@ -309,7 +309,7 @@ class ERTScene:
         """(n_presses, n_electrodes, n_electrodes) transfer resistances for (n, n_contacts, 3)
         contacts through the listed press effects (no reading effects)."""
         sensor = self.sensor() if sensor is None else sensor
-        return self._solver(sensor).transfer_resistance(self.node_conductance_s(contacts, sensor), chunk=128)
+        return self._solver(sensor).transfer_resistance(self.node_conductance_s(contacts, sensor), chunk=64)
 
     def node_conductance_s(self, contacts: np.ndarray, sensor) -> np.ndarray:
         """(n_presses, n_nodes) sheet conductance of every grid node (siemens per square) under
