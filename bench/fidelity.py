@@ -51,18 +51,21 @@ def compare_patterns(config: str, overrides, repeats: int) -> str:
     """The sensitivity rows (4, 5), the mirror row (6) and the forest's x, y R^2 (11) for each
     readout pattern on the same scene, each as mean ± sd over the rows' seeds."""
     lines = [(f"| readout (every column: {seeds_label(SEEDS)}, mean ± sd) | channels | "
-              "sensitivity per mm: corners / edge mid / centre (row 4) | P5 span / best span (row 5) | mirror ambiguity edge / centre (row 6) | R² x, y (row 11) | "
+              "sensitivity per mm: corners / edge mid / centre (row 4) | P5 span / best span (row 5) | "
+              "mirror ambiguity edge / centre (row 6) | R² x, y (row 11) | "
               f"R² x / y / depth, random presses ({RANDOM_PRESSES}) |"),
              "|---|---|---|---|---|---|---|"]
     params = scene_params(config, overrides)
     for name, pattern in PATTERNS.items():
         probe = SceneProbe({**params, "measurement": pattern}, repeats=repeats)
         four, five = corners_least_sensitive(probe).numbers["by_seed"], centre_widest_range(probe).numbers["by_seed"]
-        six, r2 = mirror_ambiguity_worst_at_edges(probe).numbers["by_seed"], np.array(extra_trees_r2(probe).numbers["by_seed"])
+        six = mirror_ambiguity_worst_at_edges(probe).numbers["by_seed"]
+        r2 = np.array(extra_trees_r2(probe).numbers["by_seed"])
         sensitivity = " / ".join(mean_sd(100 * np.array(four[k])) for k in ("corner_mean", "edge_mean", "centre"))
         p5_share = np.array(five["range"])[:, 4] / np.max(five["range"], axis=1)
         lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {sensitivity} % | {mean_sd(p5_share)} | "
-                     f"{mean_sd(six['edge'], 3)} / {mean_sd(six['centre'], 3)} | {mean_sd(r2[:, 0], 3)}, {mean_sd(r2[:, 1], 3)} | "
+                     f"{mean_sd(six['edge'], 3)} / {mean_sd(six['centre'], 3)} | "
+                     f"{mean_sd(r2[:, 0], 3)}, {mean_sd(r2[:, 1], 3)} | "
                      f"{_random_press_r2(params, pattern)} |")
     return "\n".join(lines)
 

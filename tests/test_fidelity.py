@@ -1,7 +1,8 @@
 """The fidelity table's rows that hold for rubber12 (bench/fidelity.py, docs/fidelity.md) keep
 holding, with margin: each test measures one observation of the seed paper on the scene the way
 the table does (runs/fidelity/rubber12.py), at the same scene seeds 0-2 with fewer repeats, and
-asserts it clear of the table's tolerance at every seed. Rows that do not hold are not asserted (the table records them and why)."""
+asserts it clear of the table's tolerance at every seed. Rows that do not hold are not asserted
+(the table records them and why)."""
 import json
 from dataclasses import asdict
 

@@ -59,8 +59,8 @@ class FingertipProbe:
 
     @cached_property
     def seeded(self) -> list["FingertipProbe"]:
-        return [self if seed == self.params.get("seed") else FingertipProbe({**self.params, "seed": seed}, self.repeats, (seed,))
-                for seed in self.seeds]
+        return [self if seed == self.params.get("seed")
+                else FingertipProbe({**self.params, "seed": seed}, self.repeats, (seed,)) for seed in self.seeds]
 
     def recordings(self, boards, effects=None, **overrides):
         params = {**self.params, "boards": boards, "passes_per_level": self.repeats, **overrides}

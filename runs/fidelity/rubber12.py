@@ -43,8 +43,8 @@ class SceneProbe:
 
     @cached_property
     def seeded(self) -> list["SceneProbe"]:
-        return [self if seed == self.params.get("seed") else SceneProbe({**self.params, "seed": seed}, self.repeats, (seed,))
-                for seed in self.seeds]
+        return [self if seed == self.params.get("seed")
+                else SceneProbe({**self.params, "seed": seed}, self.repeats, (seed,)) for seed in self.seeds]
 
     def scene(self, effects=None, **overrides) -> Rubber12Scene:
         params = {**self.params, **overrides}
@@ -164,7 +164,8 @@ def force_varies_with_position(probe: SceneProbe) -> Measured:
     def cv_by_depth(one):
         n = len(FORCE_DEPTHS_MM)
         x, y = np.repeat(one.points[:, 0], n), np.repeat(one.points[:, 1], n)
-        table = one.scene(one.reading_effects_without_normalisation).simulate(x, y, np.tile(FORCE_DEPTHS_MM, len(one.points)))
+        depth = np.tile(FORCE_DEPTHS_MM, len(one.points))
+        table = one.scene(one.reading_effects_without_normalisation).simulate(x, y, depth)
         pressure = table.frame["pressure_pa"].to_numpy().reshape(len(one.points), n)
         return pressure.std(axis=0, ddof=1) / pressure.mean(axis=0)
     cv = _by_seed(probe, cv_by_depth)                       # (seeds, depths)
@@ -177,7 +178,8 @@ def force_varies_with_position(probe: SceneProbe) -> Measured:
 @observation("rubber12", "3b", "The load cell measures force independently of depth (§II-E): pressure is "
              "a target of its own", "— (our criterion: corr(P, depth) < 0.99)")
 def pressure_is_not_depth(probe: SceneProbe) -> Measured:
-    corr = _by_seed(probe, lambda one: np.corrcoef(one.lab_table.frame["pressure_pa"], one.lab_table.frame["depth_mm"])[0, 1])
+    corr = _by_seed(probe, lambda one: np.corrcoef(one.lab_table.frame["pressure_pa"],
+                                                    one.lab_table.frame["depth_mm"])[0, 1])
     return judged_over_seeds(f"corr(pressure, depth) = {mean_sd(corr, 4)} on the lab protocol "
                              f"({len(probe.lab_table.frame)} presses; {_seeds(probe)}, mean ± sd)", corr < 0.99,
                              corr.mean() < 0.99, "correlation < 0.99", probe.seeds,
@@ -201,7 +203,8 @@ def corners_least_sensitive(probe: SceneProbe) -> Measured:
                              mean[CORNERS].max() < mean[CENTRE], "every corner below P5", probe.seeds,
                              {"corner_max": float(mean[CORNERS].max()), "corner_mean": float(mean[CORNERS].mean()),
                               "centre": float(mean[CENTRE]), "edge_mean": float(mean[EDGE_MIDPOINTS].mean()),
-                              "by_seed": {"corner_max": corners.max(axis=1).tolist(), "corner_mean": corners.mean(axis=1).tolist(),
+                              "by_seed": {"corner_max": corners.max(axis=1).tolist(),
+                                          "corner_mean": corners.mean(axis=1).tolist(),
                                           "edge_mean": edges.mean(axis=1).tolist(), "centre": centre.tolist()}})
 
 
@@ -249,7 +252,8 @@ def mirror_ambiguity_worst_at_edges(probe: SceneProbe) -> Measured:
             ohm = one.scene(effects).simulate(x, y, np.full(5, depth)).channels
             rest = one.scene(effects).simulate([mid], [mid], [0.0]).channels[0]
             signal = np.linalg.norm(ohm[4] / rest - 1)
-            ratio.append(0.5 * (np.linalg.norm((ohm[0] - ohm[1]) / rest) + np.linalg.norm((ohm[2] - ohm[3]) / rest)) / signal)
+            difference = np.linalg.norm((ohm[0] - ohm[1]) / rest) + np.linalg.norm((ohm[2] - ohm[3]) / rest)
+            ratio.append(0.5 * difference / signal)
         return ratio
     edge, centre = _by_seed(probe, edge_and_centre).T
     return judged_over_seeds(f"difference of presses ±2.5 mm across a centreline / press signal: near an edge "
@@ -357,7 +361,8 @@ def extra_trees_r2(probe: SceneProbe) -> Measured:
     return judged_over_seeds("R² " + ", ".join(f"{n} {mean_sd(v, 3)}" for n, v in zip(("x", "y", "z", "P"), scores.T)) +
                              f" ({len(probe.lab_table.frame)} lab presses, 100 trees, physics features, a random hold-out "
                              f"per seed, {_seeds(probe)})",
-                             (np.abs(scores - PAPER_TABLE_II) <= 0.1).all(axis=1), bool(np.all(np.abs(r2 - PAPER_TABLE_II) <= 0.1)),
+                             (np.abs(scores - PAPER_TABLE_II) <= 0.1).all(axis=1),
+                             bool(np.all(np.abs(r2 - PAPER_TABLE_II) <= 0.1)),
                              "every target within ±0.10 of the paper", probe.seeds,
                              {"r2": r2.tolist(), "r2_sd": scores.std(axis=0, ddof=1).tolist(), "by_seed": scores.tolist()})
 
