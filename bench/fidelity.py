@@ -28,6 +28,7 @@ import numpy as np  # noqa: E402
 from sklearn.ensemble import ExtraTreesRegressor  # noqa: E402
 from sklearn.metrics import r2_score  # noqa: E402
 
+from common.threads import apply_threads, configured_threads  # noqa: E402
 from runs.fidelity.observations import (  # noqa: E402
     SEEDS, CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, mean_sd, run_checks, scene_params,
     seeds_label)
@@ -120,6 +121,7 @@ def main(argv=None):
     parser.add_argument("--patterns", action="store_true", help="rubber12: compare readout patterns instead")
     parser.add_argument("overrides", nargs="*", help="Hydra overrides, e.g. scene.measurement=opposite")
     args = parser.parse_args(argv)
+    apply_threads(configured_threads() or 1)   # as train.py's default: idle library threads cost most under load
     if args.scene == "all" and (args.config or args.overrides):
         parser.error("--config and Hydra overrides apply to one scene; pick it with --scene")
 
