@@ -202,8 +202,8 @@ def summary(rows: list[dict]) -> dict:
             cell["errors"].append(r["error"])
             continue
         if r.get("chosen"):    # what the default chose, on what, and what the budget skipped
-            scored = r.get("scored_on") or {}
-            on = {"validation": "validation"}.get(scored.get("rows"), "held out")
+            scored = r.get("scored_on") or {}   # validation, or how the chosen one held training rows out
+            on = scored.get("by", {}).get(r["chosen"], scored.get("rows"))
             cell["notes"].append(f"{r['chosen']} ({on}, {scored['n']})" if scored else r["chosen"])
         elif r.get("best_epoch") is not None:   # the epochs a net was refitted for
             cell["notes"].append(f"{r['best_epoch']} epochs")
@@ -240,17 +240,16 @@ def table(rows: list[dict]) -> str:
 
 
 def pareto_figure(rows: list[dict], path: Path) -> str:
-    """Mean test accuracy over the sets every method ran on, against mean fit time; the front marked."""
+    """Mean test accuracy over the sets, against mean fit time, for the methods that ran on the most
+    sets (a net run on one set would otherwise shrink the comparison to that set); the front marked."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     cells = summary(rows)
     methods = sorted({k[1] for k in cells})
+    counts = {m: sum(bool(cells.get((s, m), {}).get("accuracy")) for s in SETS) for m in methods}
+    methods = [m for m in methods if counts[m] == max(counts.values())]
     common = [s for s in SETS if all(cells.get((s, m), {}).get("accuracy") for m in methods)]
-    if not common:  # methods that ran on different sets: compare over the sets most of them share
-        counts = {m: sum(bool(cells.get((s, m), {}).get("accuracy")) for s in SETS) for m in methods}
-        methods = [m for m in methods if counts[m] == max(counts.values())]
-        common = [s for s in SETS if all(cells.get((s, m), {}).get("accuracy") for m in methods)]
     accuracy = np.array([np.mean([np.mean(cells[(s, m)]["accuracy"]) for s in common]) for m in methods])
     fit = np.array([np.mean([np.mean(cells[(s, m)]["fit_s"]) for s in common]) for m in methods])
     front = pareto_mask(accuracy, fit)
