@@ -127,8 +127,8 @@ def _recording_groups(model, datamodule) -> dict:
 def _scores_on_training(choice: ValidationChoice, datamodule) -> bool:
     """Whether the default model trains its candidates on every training recording and scores them on
     their held-out predictions (model.score_on=auto: where the validation recordings were carved from
-    the training recordings the file declares, and each window is a whole recording's own or keeps
-    its recording)."""
+    the training recordings the file declares, and every training window belongs to a recording, so
+    none is virtual)."""
     if choice.score_on != "auto":
         return choice.score_on == "training"
     return (getattr(datamodule, "validation_carved", False) and len(datamodule.y_val) > 0
