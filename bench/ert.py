@@ -7,13 +7,14 @@ the ONNX reconstruction per frame.
 
 Simulation: `random` presses through the scene's full effect list, the sensor's press solver
 already built (cached per process; its one-off build, the resting sheet's dense inverse, is
-reported apart); frames/s is the mean +- sd
-of --repeats whole generate() calls (presses, effects, readings, the checked SensorTable), in
-wall-clock time and per second of the process's CPU time (what one core all its own would give
-when other jobs share the machine; cache and memory contention still count).
-Jacobian: TikhonovReconstruction.jacobian() from scratch (the dense baseline inverse, the adjoint
-sensitivities, the four-terminal map), mean +- sd of --repeats, and the sensitivity of the
-transfer matrix's 276 unique entries alone (models/ert/readings.py, what Gauss-Newton uses).
+reported apart); frames/s is the mean +- sd of --repeats whole generate() calls (presses,
+effects, readings, the checked SensorTable), in wall-clock time and per second of the process's
+CPU time (what one core all its own would give when other jobs share the machine; cache and
+memory contention still count).
+Jacobian: TikhonovReconstruction.jacobian() from scratch (the electrode potentials by one sparse
+LU, the adjoint sensitivities, the four-terminal map), mean +- sd of --repeats, and the
+sensitivity of the transfer matrix's 276 unique entries alone (models/ert/readings.py, what
+Gauss-Newton uses).
 Reconstruction: onnxruntime, batch 1, one thread, median of --calls calls, for Tikhonov,
 Gauss-Newton (20 x 20 pixels) and GREIT (48 x 48); the fits use a small calibration (its size
 does not change the graphs). Each row ends with the 1-minute load average before and after it:
