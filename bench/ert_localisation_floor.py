@@ -55,6 +55,8 @@ from data.scenes.ert import ERTScene, patch_loads_n  # noqa: E402
 from models.ert.readings import transfer_basis, unique_transfer_entries  # noqa: E402
 
 RANDOM_PRESS_EFFECTS = ("hysteresis", "viscoelastic_hysteresis")
+# reading effects, left out of the mean frame; the noise model has adc noise and baseline drift only
+# (a scene with electrode_contact_impedance would show its drift in the chi^2 check)
 READING = ("electrode_contact_impedance", "baseline_drift", "adc_noise")
 BOUNDS = ("adc", "adc_drift", "unknown_sensitivity")
 
@@ -63,11 +65,12 @@ def scene_node(layout: str) -> dict:
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
         cfg = compose("config", overrides=[f"scene={layout}", "seed=0"])
     node = OmegaConf.to_container(cfg.scene, resolve=True)
-    node.pop("_target_"), node.pop("_convert_", None)
+    node.pop("_target_")
+    node.pop("_convert_", None)
     return node
 
 
-def test_contacts(scene: ERTScene, forces) -> np.ndarray:
+def recording_contacts(scene: ERTScene, forces) -> np.ndarray:
     """(n, 1, 3) the `single_point` recording's presses in its order (each point at each force)."""
     points = scene.grid_points_mm()
     return np.column_stack([np.repeat(points, len(forces), axis=0), np.tile(forces, len(points))])[:, None, :]
@@ -151,7 +154,7 @@ def bounds_for(layout, node, seed, noise_levels, forces, args, normals):
     deterministic = {k: v for k, v in effects.items() if k not in RANDOM_PRESS_EFFECTS + READING}
     scene = ERTScene(**{**node, "effects": deterministic, "seed": seed, "protocol": "single_point"})
     frames = Frames(scene)
-    contacts = test_contacts(scene, forces)
+    contacts = recording_contacts(scene, forces)
     mean = frames(contacts)
     g = derivatives(frames, contacts, args.step_mm, args.step_relative)
     spread = float((effects.get("foam_spread") or {}).get("spread_per_thickness", 1.0)) * scene.foam_thickness_mm \
