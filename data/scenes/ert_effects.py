@@ -228,7 +228,7 @@ def baseline_drift(state, rng, fraction_per_50_presses=0.0057, restoring_presses
     jacobian = state["patch_jacobian"]()                      # (n_channels, n_patches)
     walk = _walk(rng, len(state["voltage_v"]), jacobian.shape[1], fraction_per_50_presses, state.get("recording"),
                  restoring_presses)
-    state["voltage_v"] = state["voltage_v"] + walk @ jacobian.T
+    state["voltage_v"] += walk @ jacobian.T
 
 
 def adc_noise(state, rng, noise_v=2.0e-4, bits=24, full_scale_v=10.0):
@@ -239,8 +239,14 @@ def adc_noise(state, rng, noise_v=2.0e-4, bits=24, full_scale_v=10.0):
         _fail("adc_noise", f"needs noise_v >= 0, bits >= 1, full_scale_v > 0, got {noise_v}, {bits}, {full_scale_v}")
     lsb = 2.0 * full_scale_v / 2 ** bits
     for key in ("voltage_v", "baseline_v"):
-        noisy = state[key] + rng.normal(0.0, noise_v, state[key].shape)
-        state[key] = np.clip(np.round(noisy / lsb) * lsb, -full_scale_v, full_scale_v)
+        # in place: the same numbers (a + b = b + a, rint = round to 0 decimals) without four
+        # temporary copies of every frame (13 M readings at 2000 presses)
+        noisy = rng.normal(0.0, noise_v, state[key].shape)
+        noisy += state[key]
+        noisy /= lsb
+        np.rint(noisy, out=noisy)
+        noisy *= lsb
+        state[key] = np.clip(noisy, -full_scale_v, full_scale_v, out=noisy)
 
 
 SENSOR_EFFECTS = {"specimen_variation": specimen_variation, "electrode_position_error": electrode_position_error,
