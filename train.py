@@ -59,7 +59,10 @@ def main(cfg: DictConfig) -> float:
     # keeps `running`, which common/run_status.py reads as `interrupted` once its process is gone.
     # A scheduler's time limit (SLURM) or a plain `kill` sends SIGTERM first: end as a failed run
     # with that reason rather than vanish mid-write (SIGKILL still reads as interrupted).
+    # Held back from `running` being written until the try below can record it as failed: a
+    # SIGTERM in between would leave a folder that reads running (then interrupted), not failed.
     signal.signal(signal.SIGTERM, terminated)
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})
     configuration = config_hash(cfg)
     running = mark_running(output_dir, configuration) if writer else None
     # Stage every artefact in a hidden folder and move it into place only when the whole run
@@ -69,6 +72,7 @@ def main(cfg: DictConfig) -> float:
     shutil.rmtree(stage, ignore_errors=True)
     moved = []
     try:
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})   # one held back is raised here
         launcher = HydraConfig.get().launcher  # joblib runs n_jobs runs side by side: `all` is their share
         parallel_jobs = launcher.get("n_jobs", 1) if "joblib" in str(launcher.get("_target_", "")) else 1
         threads = resolve_threads(cfg.threads, parallel_jobs)
