@@ -6,8 +6,8 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
 from common.errors import InputError
+from data.physics.press_update import PatchUpdateSolver
 from data.physics.sheet_conduction import (
-    PatchUpdateSolver,
     SheetGrid,
     SheetSolver,
     four_terminal_matrix,

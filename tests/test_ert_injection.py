@@ -6,7 +6,8 @@ from data.physics.optimal_injection import (
     perturbation_operator,
     recruit_pairs,
 )
-from data.physics.sheet_conduction import PatchUpdateSolver, SheetGrid, SheetSolver
+from data.physics.press_update import PatchUpdateSolver
+from data.physics.sheet_conduction import SheetGrid, SheetSolver
 from data.scenes.ert import patch_weights
 
 RING = [[20, 120], [60, 120], [100, 120], [120, 100], [120, 60], [120, 20], [100, 0], [60, 0], [20, 0],

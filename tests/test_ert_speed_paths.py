@@ -10,7 +10,8 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from common.errors import InputError
-from data.physics.sheet_conduction import PatchUpdateSolver, SheetGrid, SheetSolver, four_terminal_voltage_v
+from data.physics.press_update import PatchUpdateSolver
+from data.physics.sheet_conduction import SheetGrid, SheetSolver, four_terminal_voltage_v
 from data.readers.table_reader import check_model_block, check_model_values
 from data.scenes.ert import injection_pairs, measurement_pairs, patch_weights
 

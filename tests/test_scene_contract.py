@@ -8,7 +8,8 @@ from omegaconf import OmegaConf
 
 import data.scenes.rubber12 as rubber12
 from common.errors import InputError
-from data.physics.sheet_conduction import NearFarSolver, PatchUpdateSolver, pair_resistance_ohm
+from data.physics.press_update import NearFarSolver, PatchUpdateSolver
+from data.physics.sheet_conduction import pair_resistance_ohm
 from data.scenes.rubber12 import Rubber12Scene
 from data.scenes.rubber12_effects import EFFECTS
 

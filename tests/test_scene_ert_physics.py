@@ -170,7 +170,7 @@ def test_impossible_parameters_are_one_line_errors(effects):
 # -- SVD-optimal injection: scores that do not depend on the SVD's basis -------------------------
 def test_leading_subspace_scores_tie_whole_symmetry_orbits():
     from data.physics.optimal_injection import perturbation_operator, recruit_pairs
-    from data.physics.sheet_conduction import PatchUpdateSolver
+    from data.physics.press_update import PatchUpdateSolver
     from data.scenes.ert import patch_weights
     ring = np.array([[20, 120], [60, 120], [100, 120], [120, 100], [120, 60], [120, 20], [100, 0], [60, 0], [20, 0],
                      [0, 20], [0, 60], [0, 100]], dtype=float)

@@ -39,8 +39,8 @@ import scipy.sparse as sp
 from scipy.special import ndtr
 
 from common.errors import InputError
+from data.physics.press_update import PatchUpdateSolver
 from data.physics.sheet_conduction import (
-    PatchUpdateSolver,
     SheetGrid,
     SheetSolver,
     four_terminal_matrix,

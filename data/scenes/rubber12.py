@@ -28,7 +28,8 @@ import pandas as pd
 
 from common.errors import InputError
 from common.progress import progress
-from data.physics.sheet_conduction import NearFarSolver, PatchUpdateSolver, SheetGrid, SheetSolver, pair_resistance_ohm
+from data.physics.press_update import NearFarSolver, PatchUpdateSolver
+from data.physics.sheet_conduction import SheetGrid, SheetSolver, pair_resistance_ohm
 from data.scenes.contract import random_generator_for, resolve_effects
 from data.scenes.rubber12_effects import EFFECTS, FIELD_EFFECTS, READING_EFFECTS
 from data.sensor_table import SensorTable

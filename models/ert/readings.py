@@ -12,7 +12,8 @@ maps of n_z columns.
 import numpy as np
 import scipy.sparse as sp
 
-from data.physics.sheet_conduction import PatchUpdateSolver, SheetGrid, SheetSolver, four_terminal_matrix
+from data.physics.press_update import PatchUpdateSolver
+from data.physics.sheet_conduction import SheetGrid, SheetSolver, four_terminal_matrix
 from common.errors import InputError
 from data.scenes.ert import injection_pairs, measurement_pairs, patch_weights
 
