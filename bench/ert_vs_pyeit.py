@@ -32,8 +32,8 @@ trained on presses of 4 other simulated sensors at the run's noise), `greit_lear
 (models/ert/learned_inverse.py: extra trees on GREIT's image, trained on the same other
 sensors' presses), `learned_mlp` (models/ert/learned_readings_inverse.py: a linear map to the
 patch loads and an MLP on the 5 x 5 patches around the most loaded one and the window's place,
-trained on 40 other simulated sensors x 1,000 presses at the run's noise; its noise weight and
-training epoch chosen on calibration). The information floor these errors sit above:
+trained on 80 other simulated sensors x 1,000 presses at the run's noise; its noise weight chosen
+on calibration, then three nets at that weight averaged). The information floor these errors sit above:
 bench/ert_localisation_floor.py.
 
 Costs: set-up (pyEIT: mesh + Jacobian + H; Touchstone: the fit, which for GREIT includes

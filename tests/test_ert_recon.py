@@ -188,7 +188,7 @@ def test_learned_study_trains_on_another_sensor_instance(compose_config, tmp_pat
 
 
 MLP = {"n_training_sensors": 2, "presses_per_sensor": 150, "noise_weights": [1e-5, 1e-4], "width": 16, "epochs": 3,
-       "half_width_patches": 1}
+       "half_width_patches": 1, "n_members": 2}
 
 
 @pytest.fixture(scope="module")
@@ -242,6 +242,24 @@ def test_learned_mlp_never_trains_on_the_sensor_under_test_and_is_deterministic(
     assert np.array_equal(again.predict(cal.channels), model.predict(cal.channels))
     other = fit_reconstruction("learned_mlp", cfg, 4, cal.channels, cal.targets, MLP)   # another seed: another net
     assert not np.array_equal(other.predict(cal.channels), model.predict(cal.channels))
+
+
+def test_learned_mlp_predicts_the_mean_of_its_members(learned_mlp_and_calibration):
+    import copy
+
+    import torch
+
+    _, cal, model = learned_mlp_and_calibration
+    members = model.module_.mlp.nets
+    assert len(members) == MLP["n_members"]
+    alone = []
+    for net in members:                        # the same module with one member's net as its MLP
+        single = copy.deepcopy(model.module_)
+        single.mlp = copy.deepcopy(net)
+        with torch.no_grad():
+            alone.append(single(torch_tensor(cal.channels)).numpy())
+    assert not np.allclose(alone[0], alone[1])           # different nets
+    assert np.allclose(np.mean(alone, axis=0), model.predict(cal.channels), atol=1e-4)
 
 
 def test_learned_mlp_trains_on_greits_simulated_presses_reduced_sensor_by_sensor(learned_mlp_and_calibration):
