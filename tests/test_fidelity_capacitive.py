@@ -1,6 +1,6 @@
 """The capacitive fidelity rows that hold (runs/fidelity/capacitive6x6.py, docs/fidelity.md) keep
-holding, with margin, on one seed; the paper-configured models are what they say; on the curved
-variant the tree wins; the model ranking under both protocols is measured (slow).
+holding, with margin, on one seed; the paper-configured models are what they say; the tree wins
+(row 4a); the model ranking under both protocols is measured (slow).
 Row 1 (time per frame) is not asserted: no timed assertions."""
 import numpy as np
 import pytest
@@ -34,7 +34,7 @@ def test_detection_limit_peak_and_linearity_are_the_papers(probe):
     numbers = rows.detection_limit_and_linearity(probe).numbers
     assert 0.07 < np.mean(numbers["lod_n"]) < 0.15                  # table: 0.108, tolerance 0.05-0.2 N
     assert 115 < np.mean(numbers["peak_counts"]) < 190              # table: 143, tolerance 100-225 counts
-    assert np.mean(numbers["line_r2"]) > 0.995                      # table: 0.99999, tolerance 0.99
+    assert 0.995 < np.mean(numbers["line_r2"]) < 0.999              # table: 0.9967, tolerance 0.99; the paper 0.995-0.998
 
 
 def test_decision_tree_reaches_the_papers_own_accuracy(probe):
@@ -72,16 +72,18 @@ def test_paper_configured_models_are_one_per_sensor_from_its_own_reading():
     assert len(probe.fit("paper", 0, "gaussian_process", "paper-configured")["sweep"]) == rows.SWEEP_PRESSES
 
 
-def test_on_the_curved_sensor_the_paper_configured_tree_is_best_by_a_margin():
-    """Row 4a as it is judged (docs/fidelity.md): on capacitive6x6_curved, whose response bends as
-    the paper's does, the paper-configured tree beats the linear models on the paper's split and
-    on the split by repetition, and the GP with scikit-learn 1.2.2's default kernel (fixed, no
-    noise term) interpolates noisy repeats far off the force (row 5)."""
-    probe = rows.CapacitiveProbe(scene_params("capacitive6x6_curved", ["scene.n_repetitions=20"]), seeds=[0])
+def test_the_paper_configured_tree_is_best_by_a_margin():
+    """Row 4a as it is judged (docs/fidelity.md): the paper-configured tree beats every other
+    model on the paper's split and on the split by repetition, because the default sensor's
+    response bends as the paper's does; the linear models' R² lies in the paper's 0.995-0.998
+    band; the GP with scikit-learn 1.2.2's default kernel (fixed, no noise term) predicts some
+    presses far off the force (row 5)."""
+    probe = rows.CapacitiveProbe(scene_params("capacitive6x6", ["scene.n_repetitions=20"]), seeds=[0])
     for protocol in rows.PROTOCOLS:
         rmse = {m: v.mean() for m, v in probe.per_model(protocol, "rmse", configuration="paper-configured").items()}
-        assert rmse["decision_tree"] < 0.6 * min(rmse["linear_regression"], rmse["svr"])   # table: 0.02 vs 0.05 N
+        assert rmse["decision_tree"] < 0.6 * min(rmse["linear_regression"], rmse["svr"])   # table: 0.018 vs 0.059 N
         assert rmse["gaussian_process"] > 1.0                                          # table: several N
+        assert rmse["decision_tree"] == min(rmse.values())                            # row 4a's criterion
     r2 = probe.per_model("paper", "r2", configuration="paper-configured")
     assert 0.99 < r2["linear_regression"].mean() < 0.999 < r2["decision_tree"].mean()   # the paper: 0.995-0.998, 0.9996
 
