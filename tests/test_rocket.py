@@ -81,6 +81,26 @@ def test_shifted_sums_equal_an_explicit_convolution_with_the_84_kernels(n_channe
         assert ties[1:].mean() < 0.01          # ties are rare off the constant window
 
 
+def test_biases_own_outputs_and_inner_pooling_agree_with_the_whole_transform():
+    """A kernel's output on its own window (what its biases are quantiles of) is that row of the
+    batched product; eager torch, comparing inner-pooled kernels on the inner part only, counts
+    what the graph's -inf padding counts."""
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal((7, 2, 80)).cumsum(-1).astype(np.float32)
+    x[2, :, 30:] = 0.5                                            # a flat stretch: outputs tie biases
+    module = MiniRocket(2, 80, 2_000)
+    module.fit_biases(x, np.random.default_rng(0), 4)
+    with torch.no_grad():
+        for group in module.groups:
+            drawn = rng.integers(len(x), size=(len(group.dilations), 84))
+            own = group.own_outputs(torch.from_numpy(x[drawn])).numpy()
+            rows = group.convolutions(torch.from_numpy(x)).numpy()[drawn, np.arange(len(group.dilations))[:, None],
+                                                                    np.arange(84)]
+            np.testing.assert_allclose(own, rows, rtol=0, atol=1e-5 * np.abs(rows).max())
+            padded_count = group._traced_features(torch.from_numpy(x), 1)
+            np.testing.assert_array_equal(group(torch.from_numpy(x)).numpy(), padded_count.numpy())
+
+
 def test_long_windows_split_dilations_into_cache_sized_groups():
     short, long = MiniRocket(1, 150, 10_000), MiniRocket(2, 1800, 10_000)
     assert max(len(g.dilations) for g in short.groups) > 1

@@ -8,9 +8,15 @@ three of nine), so a kernel's output is
     C = 3 * (x[t + a d] + x[t + b d] + x[t + c d]) - sum_j x[t + j d]     (j = 0..8, shifted by -4d)
 
 (the paper's alpha = -X summed over the nine shifted copies and gamma = 3X at the kernel's three
-positions). The nine shifted copies of the input are made once per dilation and shared by all 84
-kernels, and so are the nine `3 x_c - total` and the 36 pair sums built from them: each kernel
-output is one addition more, the graph never runs 84 convolutions.
+positions). The nine shifted copies of the input are made once per dilation (one Gather) and
+shared by all 84 kernels, whose outputs are one matrix product of their -1/+2 weights (84 x 9 per
+channel, the channel combination folded in as zero weights) with the copies. The paper's own
+shortcut, 3 x_a + (3 x_b + (3 x_c - total)) on shared pair sums, one addition per output, ran
+slower as separate tensor operations: 3.5x slower in torch at 427 and 1,460 steps, and the
+exported graph 1.2-1.3x slower in onnxruntime at 150-1,460 steps (measured side by side, CPU time
+at load ~15): each of its operations is a pass over memory, where the matrix product keeps its
+nine terms in registers. Every product w x is exact (w is -1, 0 or 2), so an output differs
+between the two only by the order of its nine additions.
 Dilations are 2^0 .. (length-1)/8 spaced exponentially, with as many features per kernel at each
 as the paper's 10,000-feature budget gives (9,996 = 84 x 119). Half of the (dilation, kernel)
 pairs, alternating, pool over the whole zero-padded output, the others over the part the padding
@@ -19,9 +25,9 @@ channels (summed before the kernel, as the convolution is linear); its biases ar
 its output on one random training window, at the low-discrepancy quantiles (k * golden ratio)
 mod 1; a feature is the proportion of positive values (PPV) of output minus bias.
 
-Everything is float32 and the additions run in a fixed order, so onnxruntime reproduces the eager
-features exactly up to the last bit of the mean; on signals with flat stretches many biases sit
-at an output value itself, where a rounding difference flips a comparison.
+Everything is float32; torch's and onnxruntime's matrix products may order the nine additions
+differently, which matters only where a bias sits at an output value itself (signals with flat
+stretches), where a rounding difference flips a comparison.
 """
 import itertools
 import math
@@ -33,14 +39,12 @@ from torch import nn
 KERNEL_LENGTH = 9
 KERNEL_POSITIONS = torch.tensor(list(itertools.combinations(range(KERNEL_LENGTH), 3)), dtype=torch.long)  # 84 x 3
 N_KERNELS = len(KERNEL_POSITIONS)
-PAIR_POSITIONS = torch.tensor(list(itertools.combinations(range(KERNEL_LENGTH), 2)), dtype=torch.long)  # 36 x 2
-KERNEL_PAIR = torch.tensor([PAIR_POSITIONS.tolist().index([b, c]) for _, b, c in KERNEL_POSITIONS.tolist()])
-PAIR_START = [sum(KERNEL_LENGTH - 1 - b for b in range(first)) for first in range(KERNEL_LENGTH)]  # first pair (b, c) with b >= first
 # per window, at most: a dilation group's outputs (x channels), and the comparisons of one PPV step; more spills the cache
 CONVOLUTION_ELEMENTS = 1 << 18
-COMPARISON_ELEMENTS = 1 << 19
+COMPARISON_ELEMENTS = 1 << 18
 MIN_LENGTH = KERNEL_LENGTH
 GOLDEN_RATIO = (math.sqrt(5) + 1) / 2
+KERNEL_WEIGHTS = 3 * torch.zeros(N_KERNELS, KERNEL_LENGTH).scatter_(1, KERNEL_POSITIONS, 1.0) - 1   # -1, +2 at a, b, c
 
 
 def dilations_and_features(length: int, n_features: int, max_dilations_per_kernel: int = 32):
@@ -78,26 +82,25 @@ class DilationGroup(nn.Module):
     """The dilations that have the same number of features per kernel, computed at once:
     windows [batch, channels, length] -> their PPV features [batch, dilations x 84 x count].
 
-    One Gather makes the nine shifted copies at every dilation of the group [batch, channels,
-    dilations, 9, length], four Gathers and two Adds the 84 kernels' outputs, one Greater / Cast /
+    One Gather makes the nine shifted copies per channel at every dilation of the group [batch,
+    dilations, channels x 9, length], one MatMul the 84 kernels' outputs, one Greater / Cast /
     ReduceSum per few dilations the PPVs. A group holds, and a PPV step compares, only as many
     dilations (and, in eager torch, windows) as keep these tensors in cache: one dilation's
     comparisons at 1,460 steps are 84 x 4 x 1,460 floats (2 MB); the same transform in one pass
     over whole groups ran 1.4x slower in onnxruntime and 12x slower in torch (measured side by
-    side at 1,460 steps, load ~10). Kernels pooled over the inner part get -inf
-    outside it (`pool_offset`: never above a bias) and their count divided by the inner length
-    (`pool_scale`)."""
+    side at 1,460 steps, load ~10). In the graph, kernels pooled over the inner part get -inf
+    outside it (`pool_offset`: never above a bias); eager torch compares them on the inner part
+    only. Either way the count is divided by the pooled length (`pool_scale`)."""
 
     def __init__(self, n_channels: int, length: int, dilations: list[int], first_index: int, count: int):
         super().__init__()
-        self.n_channels, self.count, self.dilations = n_channels, count, list(dilations)
+        self.n_channels, self.count, self.dilations, self.first_index = n_channels, count, list(dilations), first_index
         d = torch.tensor(dilations)
-        shifts = (torch.arange(KERNEL_LENGTH) - KERNEL_LENGTH // 2)[None, :, None] * d[:, None, None]
+        shifts = (torch.arange(KERNEL_LENGTH) - KERNEL_LENGTH // 2)[None, None, :, None] * d[:, None, None, None]
         self.padding = 4 * max(dilations)
-        self.register_buffer("shift_index", self.padding + shifts + torch.arange(length)[None, None, :])
-        self.register_buffer("pair_positions", PAIR_POSITIONS.clone())                 # 36 x 2
-        self.register_buffer("kernel_first", KERNEL_POSITIONS[:, 0].clone())          # each kernel's a
-        self.register_buffer("kernel_pair", KERNEL_PAIR.clone())                       # and its (b, c) pair
+        channel_start = (length + 2 * self.padding) * torch.arange(n_channels)[None, :, None, None]
+        # into the channels' zero-padded inputs laid end to end: [D, channels x 9, length], channel-major
+        self.register_buffer("shift_index", (channel_start + self.padding + shifts + torch.arange(length)).flatten(1, 2))
         self.register_buffer("channel_mask", torch.ones(n_channels, len(dilations), N_KERNELS, 1))
         self.register_buffer("biases", torch.zeros(len(dilations), N_KERNELS, count, 1))
         # the paper alternates, from the first dilation on, kernels pooled over the whole output and over the inner part
@@ -108,61 +111,73 @@ class DilationGroup(nn.Module):
         self.register_buffer("pool_offset", torch.where((t < crop) | (t >= length - crop), -math.inf, 0.0))
         self.register_buffer("pool_scale", 1.0 / (length - 2 * crop).float())
 
+    def kernel_weights(self) -> torch.Tensor:
+        """Each (dilation, kernel)'s weights on the shifted copies of its channels: -1, or +2 at
+        the kernel's three positions, on the channels of its combination, 0 on the others:
+        [D, 84, channels x 9]."""
+        return (self.channel_mask[..., 0].permute(1, 2, 0)[..., None] * KERNEL_WEIGHTS[:, None, :]).flatten(2)
+
     def convolutions(self, x: torch.Tensor) -> torch.Tensor:
         """The 84 kernels' outputs at each of the group's dilations on each kernel's channel
-        combination, zero-padded: [batch, dilations, 84, length]. Kernel (a, b, c) is
-        3 x_a + (3 x_b + (3 x_c - sum_j x_j)): the nine `3 x_c - total` and the 36 pair sums are
-        shared, so each of the 84 outputs costs one addition."""
-        padded = nn.functional.pad(x, (self.padding, self.padding))
-        copies = padded[:, :, self.shift_index]                      # [batch, channels, D, 9, length]
-        total = copies[:, :, :, 0]
-        for j in range(1, KERNEL_LENGTH):
-            total = total + copies[:, :, :, j]
-        shifted = 3 * copies                                         # gamma = 3X
-        last = shifted - total.unsqueeze(3)                          # 3 x_c - sum_j x_j (alpha = -X)
-        if torch.jit.is_tracing():  # onnxruntime: four Gathers ran faster than 15 Slices, Adds and Concats
-            pairs = (shifted.index_select(3, self.pair_positions[:, 0])
-                     + last.index_select(3, self.pair_positions[:, 1]))
-            per_channel = (shifted.index_select(3, self.kernel_first)
-                           + pairs.index_select(3, self.kernel_pair))  # [batch, channels, D, 84, length]
-        else:  # torch: the same additions on slices (index_select took a quarter of the eager transform). Pairs
-            # (b, c) in lexicographic order are, for each b, 3 x_b + last[b + 1:]; kernels (a, b, c) in
-            # itertools.combinations order are, for each a, 3 x_a + the pairs with b > a (a tail of the pairs)
-            pairs = torch.cat([shifted[:, :, :, b:b + 1] + last[:, :, :, b + 1:] for b in range(KERNEL_LENGTH - 1)], 3)
-            per_channel = torch.cat([shifted[:, :, :, a:a + 1] + pairs[:, :, :, PAIR_START[a + 1]:]
-                                     for a in range(KERNEL_LENGTH - 2)], 3)
-        if self.n_channels == 1:
-            return per_channel[:, 0]
-        combined = per_channel[:, 0] * self.channel_mask[0]
-        for c in range(1, self.n_channels):
-            combined = combined + per_channel[:, c] * self.channel_mask[c]
-        return combined
+        combination, zero-padded: [batch, dilations, 84, length]; one matrix product of the
+        kernels' weights with the nine shifted copies per channel."""
+        padded = nn.functional.pad(x, (self.padding, self.padding)).flatten(1)    # [batch, channels x padded]
+        return torch.matmul(self.kernel_weights(), padded[:, self.shift_index])  # copies [batch, D, channels x 9, length]
+
+    def own_outputs(self, x: torch.Tensor) -> torch.Tensor:
+        """Each (dilation, kernel)'s output on its own window only, `x` [D, 84, channels, length]
+        -> [D, 84, length] (what fitting the biases needs: one row of `convolutions` per (dilation,
+        kernel), not all 84 on every window drawn). The products w x are exact (w is -1, 0 or 2),
+        so summing them in the order of the copies gives what the matrix product gives, bit for
+        bit where it sums in that order (as MKL's does here: tested), and biases that equal an
+        output value (flat stretches) equal it in the transform too."""
+        padded = nn.functional.pad(x, (self.padding, self.padding)).flatten(2)   # [D, 84, channels x padded]
+        index = self.shift_index.flatten(1)[:, None].expand(-1, N_KERNELS, -1)
+        copies = padded.gather(2, index).view(*index.shape[:2], *self.shift_index.shape[1:])  # [D, 84, C x 9, length]
+        weights = self.kernel_weights()[..., None]                                    # [D, 84, C x 9, 1]
+        outputs = weights[:, :, 0] * copies[:, :, 0]
+        for r in range(1, copies.shape[2]):
+            outputs = outputs + weights[:, :, r] * copies[:, :, r]
+        return outputs
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
-        length = x.shape[-1]
-        comparisons = N_KERNELS * self.count * length                  # per window and dilation
         if torch.jit.is_tracing():  # export/torch_graphs.to_onnx traces: one batch of any size
-            return self._features(x, max(1, COMPARISON_ELEMENTS // comparisons))
-        # eager (fit and predict run batches of many windows): a few windows at a time as well
-        windows = max(1, min(CONVOLUTION_ELEMENTS // (len(self.dilations) * N_KERNELS * self.n_channels * length),
-                             COMPARISON_ELEMENTS // comparisons))
-        step = max(1, COMPARISON_ELEMENTS // (windows * comparisons))
-        return torch.cat([self._features(part, step) for part in x.split(windows)])
+            comparisons = N_KERNELS * self.count * x.shape[-1]                  # per window and dilation
+            return self._traced_features(x, max(1, COMPARISON_ELEMENTS // comparisons))
+        # eager (fit and predict run batches of many windows): a few windows at a time
+        length = x.shape[-1]
+        windows = max(1, min(CONVOLUTION_ELEMENTS // (len(self.dilations) * (N_KERNELS + KERNEL_LENGTH * self.n_channels)
+                                                       * length),
+                             COMPARISON_ELEMENTS // (N_KERNELS // 2 * self.count * length)))
+        return torch.cat([self._eager_features(part) for part in x.split(windows)])
 
-    def _features(self, x: torch.Tensor, step: int) -> torch.Tensor:
+    def _traced_features(self, x: torch.Tensor, step: int) -> torch.Tensor:
         """PPV features [batch, D x 84 x count], `step` dilations at a time so that their
-        comparisons stay in cache."""
+        comparisons stay in cache: Greater, Cast, ReduceSum."""
         outputs = self.convolutions(x) + self.pool_offset                         # [batch, D, 84, length]
         features = []
         for j in range(0, outputs.shape[1], step):
-            pooled, biases = outputs[:, j:j + step].unsqueeze(3), self.biases[j:j + step]
-            if torch.jit.is_tracing():   # Greater, Cast, ReduceSum
-                counts = (pooled > biases).float().sum(-1)
-            else:  # the same 0/1 written straight as float: torch's bool-to-float cast took 2/3 of the transform
-                shape = (*pooled.shape[:3], biases.shape[2], pooled.shape[-1])    # [batch, step, 84, count, length]
-                counts = torch.gt(pooled, biases, out=torch.empty(shape)).sum(-1)
+            counts = (outputs[:, j:j + step].unsqueeze(3) > self.biases[j:j + step]).float().sum(-1)
             features.append(counts * self.pool_scale[j:j + step])                # [batch, step, 84, count]
         return torch.cat(features, 1).flatten(1)
+
+    def _eager_features(self, x: torch.Tensor) -> torch.Tensor:
+        """The same features in torch, at each dilation the 42 kernels pooled over the whole
+        output and the 42 pooled over the inner part in turn (the inner ones compared on that
+        part only: no -inf to add, and at the largest dilations most of the output is skipped),
+        each step's 0/1 written straight as float into one scratch tensor (torch's bool-to-float
+        cast or bool sum ran 3-5x slower)."""
+        outputs = self.convolutions(x)                                           # [batch, D, 84, length]
+        batch, length = len(x), x.shape[-1]
+        counts = torch.empty(batch, len(self.dilations), N_KERNELS, self.count)
+        scratch = torch.empty(batch * (N_KERNELS // 2) * self.count * length)
+        for j, d in enumerate(self.dilations):
+            whole = (self.first_index + j) % 2
+            for first, crop in ((whole, 0), (1 - whole, 4 * d)):
+                rows = outputs[:, j, first::2, crop:length - crop].unsqueeze(2)       # [batch, 42, 1, pooled length]
+                above = scratch[:rows.numel() * self.count].view(batch, N_KERNELS // 2, self.count, -1)
+                torch.sum(torch.gt(rows, self.biases[j, first::2], out=above), -1, out=counts[:, j, first::2])
+        return (counts * self.pool_scale).flatten(1)
 
 
 class MiniRocket(nn.Module):
@@ -197,7 +212,9 @@ class MiniRocket(nn.Module):
 
     def fit_biases(self, x: np.ndarray, rng: np.random.Generator, chunk: int) -> None:
         """Draw each (dilation, kernel)'s channel combination and training window (in the order of
-        the dilations), and set its biases to quantiles of that window's output."""
+        the dilations), and set its biases to quantiles of that window's output. (`chunk`, the
+        windows per batch that HydraMiniRocket's transform takes, is not needed: one window per
+        (dilation, kernel) is convolved.)"""
         max_exponent = math.log2(min(self.n_channels, KERNEL_LENGTH) + 1)
         masks = np.zeros((len(self.dilations), N_KERNELS, self.n_channels), dtype=np.float32)
         examples = np.zeros((len(self.dilations), N_KERNELS), dtype=np.int64)
@@ -212,15 +229,8 @@ class MiniRocket(nn.Module):
         for group in self.groups:
             n = group.biases.shape[0]
             group.channel_mask.copy_(torch.from_numpy(masks[i:i + n].transpose(2, 0, 1)[..., None]))
-            unique, where = np.unique(examples[i:i + n], return_inverse=True)
-            where = torch.from_numpy(where.reshape(n, N_KERNELS))
-            own = torch.zeros(n, N_KERNELS, self.length)
             with torch.no_grad():
-                for s in range(0, len(unique), chunk):
-                    outputs = group.convolutions(torch.from_numpy(x[unique[s:s + chunk]]))   # [chunk, D, 84, length]
-                    for e in range(outputs.shape[0]):
-                        mine = where == s + e
-                        own[mine] = outputs[e][mine]
+                own = group.own_outputs(torch.from_numpy(x[examples[i:i + n]]))           # [D, 84, length]
             levels = np.stack([sequence[starts[i + j]:starts[i + j + 1]].reshape(N_KERNELS, group.count)
                                for j in range(n)])                                   # [D, 84, count]
             group.biases[..., 0] = torch.from_numpy(linear_quantiles(own.numpy(), levels).astype(np.float32))
