@@ -123,7 +123,7 @@ class DilationGroup(nn.Module):
         kernels' weights with the nine shifted copies per channel."""
         padded = nn.functional.pad(x, (self.padding, self.padding)).flatten(1)    # [batch, channels x padded]
         # index_select on the flat index: torch's advanced indexing took twice as long; both are one Gather in the graph
-        copies = padded.index_select(1, self.shift_index.flatten()).view(len(x), *self.shift_index.shape)
+        copies = padded.index_select(1, self.shift_index.flatten()).view(-1, *self.shift_index.shape)
         return torch.matmul(self.kernel_weights(), copies)                       # copies [batch, D, channels x 9, length]
 
     def own_outputs(self, x: torch.Tensor) -> torch.Tensor:
