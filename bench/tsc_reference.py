@@ -3,6 +3,16 @@
     OMP_NUM_THREADS=1 .venv/bin/python bench/tsc_reference.py [--tasks phase frequency imu6]
         [--models prcnn rescnn inceptiontime lstm_fcn] [--epochs 150] [--n 300] [--seeds 0] [--trainer tsc]
     OMP_NUM_THREADS=1 .venv/bin/python bench/tsc_reference.py --batchnorm-check --seeds 0 1 2
+    OMP_NUM_THREADS=1 .venv/bin/python bench/tsc_reference.py --epoch-curve ArrowHead.npz --models rescnn
+        [--epochs 1500] [--every 5] [--seeds 0 1 2] [--skip-folds]
+
+--epoch-curve: on a recordings NPZ with a declared train/test split (X, y, split; bench/tsc_peers.py
+writes the UCR/UEA sets so), how test accuracy depends on the epoch count the refit trains for,
+and which count the reference recipe's folds choose. One fit on every training recording as the
+refit trains (the plateau on the training loss, no early stopping), its test accuracy logged every
+--every epochs: the refit for E epochs IS this fit's network at epoch E (same seed, same schedule).
+Then (unless --skip-folds) the whole `trainer=reference` fit: the folds' choice, their pooled
+held-out accuracy there, the refit's test accuracy and fit time.
 
 Generated data whose optimal accuracy is known (no public archive can be downloaded here):
   frequency  1 channel: a sine of 3 or 5 cycles per series at a random phase, plus noise.
@@ -25,6 +35,7 @@ stopping), the best validation epoch, validation and test accuracy, and the fit 
 import argparse
 import os
 import sys
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -66,6 +77,39 @@ def batchnorm_check(seeds, n: int = 100, epochs: int = 15) -> None:
                   f"| {(model.predict(X[test]) == y[test]).mean():.3f} |")
 
 
+def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool) -> None:
+    import numpy as np
+    data = np.load(path, allow_pickle=True)
+    classes, y_all = np.unique(data["y"], return_inverse=True)
+    train, test = data["split"] == "train", data["split"] == "test"
+    X, y, X_test, y_test = data["X"][train], y_all[train], data["X"][test], y_all[test]
+    print(f"{Path(path).stem}: {train.sum()} training / {test.sum()} test recordings, {X.shape[2]} steps, "
+          f"{len(classes)} classes; 1-minute load average {os.getloadavg()[0]:.1f}")
+    for model in models:
+        for seed in seeds:
+            estimator = reference_model(model, epochs, seed, ["trainer.epoch_selection=train_loss",
+                                                              "trainer.early_stopping_patience=null"])
+            curve = []
+
+            def logged(record, estimator=estimator, curve=curve):
+                if record["epoch"] % every == 0:
+                    curve.append((record["epoch"], float((estimator.predict(X_test) == y_test).mean())))
+            estimator.fit(X, y, epoch_callback=logged)
+            print(f"{model} seed {seed}, test accuracy of the refit for E epochs: "
+                  + " ".join(f"{e}:{a:.3f}" for e, a in curve), flush=True)
+            if folds:
+                chosen = reference_model(model, epochs, seed)
+                start = time.perf_counter()
+                chosen.fit(X, y)
+                fit_s = time.perf_counter() - start
+                best = chosen.best_epoch_
+                print(f"{model} seed {seed}, trainer=reference: folds ran {chosen.fold_epochs_run_} epochs, chose {best} "
+                      f"(pooled held-out accuracy over 11 epochs {chosen.fold_curve_['accuracy'][best - 1]:.3f}; each fold alone "
+                      f"{chosen.fold_best_epochs_}); refit test accuracy "
+                      f"{(chosen.predict(X_test) == y_test).mean():.3f}, fit {fit_s:.0f} s at load "
+                      f"{os.getloadavg()[0]:.1f}", flush=True)
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--tasks", nargs="*", default=list(TASKS), choices=TASKS)
@@ -77,9 +121,15 @@ def main(argv=None):
                         help="tsc: the fingertip paper's SGD schedule, for comparison")
     parser.add_argument("--batchnorm-check", action="store_true",
                         help="only the eval-mode vs batch-statistics measurement (paper recipe, 1 step per epoch)")
+    parser.add_argument("--epoch-curve", metavar="NPZ",
+                        help="test accuracy against the refit's epoch count on a recordings NPZ (see above)")
+    parser.add_argument("--every", type=int, default=5, help="--epoch-curve: test accuracy every this many epochs")
+    parser.add_argument("--skip-folds", action="store_true", help="--epoch-curve: the curve alone")
     args = parser.parse_args(argv)
     if args.batchnorm_check:
         return batchnorm_check(args.seeds)
+    if args.epoch_curve:
+        return epoch_curve(args.epoch_curve, args.models, args.seeds, args.epochs, args.every, not args.skip_folds)
     rows = []
     for task in args.tasks:
         for model in args.models:

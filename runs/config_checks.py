@@ -158,7 +158,7 @@ TRAINER = {
     "lr_gamma": number(0, 1, open_low=True),
     "max_batch_fraction": number(0, 1, open_low=True, null=True),
     "recalibrate_batchnorm": FLAG,
-    "epoch_selection": text("folds", "validation"),   # trainer/reference.yaml: how a net's epochs are chosen
+    "epoch_selection": text(*module_constant("models.timeseries_classifier", "EPOCH_SELECTIONS")),  # how a net's epochs are chosen
     "n_folds": integer(2),                             # epoch_selection=folds: stratified folds by recording
     "resume_from": text(null=True),
     "checkpoint": FLAG,

@@ -13,6 +13,7 @@ from data.splits.indices import predefined_split, stratified_folds
 from export.run_export import write_onnx
 from models.deployable import TimeSeriesPipeline
 from models.nets.inceptiontime import InceptionTime
+from models import timeseries_classifier
 from models.timeseries_classifier import TimeSeriesClassifier
 from runs.run import run
 
@@ -63,18 +64,54 @@ def test_carving_validation_keeps_a_training_recording_of_every_class():
     assert list(train) == [0, 1, 2] and len(val) == 0                    # nothing carved, nothing refused
 
 
-def test_the_refit_trains_for_the_epochs_the_folds_chose():
+def test_the_folds_choose_the_epoch_of_the_best_pooled_held_out_accuracy(monkeypatch):
+    monkeypatch.setattr(timeseries_classifier, "FOLD_CURVE_HALF_WINDOW", 2)   # a window that fits in 6 epochs
     X, y = tones()
-    model = classifier(epoch_selection="folds", n_folds=2, max_epochs=8).fit(X, y)
-    # Each fold is a validation-mode fit on its own recordings: the same best epoch and held-out
-    # predictions when done by hand.
-    for (fit, held), best in zip(stratified_folds(y, np.arange(len(y)), 2, 0), model.fold_best_epochs_):
-        fold = classifier(epoch_selection="validation", max_epochs=8).fit(X[fit], y[fit], X[held], y[held])
-        assert fold.best_epoch_ == best
-        np.testing.assert_allclose(model.out_of_fold_proba_[held], fold.predict_proba(X[held]), rtol=1e-5, atol=1e-6)
-    expected = int(np.ceil(np.median(model.fold_best_epochs_)))
-    assert model.best_epoch_ == expected and model.n_epochs_ == expected   # the refit ran exactly that many
-    assert all("val_loss" not in record for record in model.history_)      # on every training window, no validation
+    model = classifier(epoch_selection="folds", n_folds=2, max_epochs=6).fit(X, y)
+    # By hand: each fold's network after e epochs, trained as the refit trains (the plateau on the
+    # training loss: no validation windows given), predicting its held-out recordings.
+    folds = stratified_folds(y, np.arange(len(y)), 2, 0)
+    proba = np.zeros((6, len(y), 3))
+    for fit, held in folds:
+        for e in range(1, 7):
+            proba[e - 1, held] = classifier(max_epochs=e).fit(X[fit], y[fit]).predict_proba(X[held])
+    accuracy = (proba.argmax(axis=2) == y).mean(axis=1)
+    loss = -np.log(proba[:, np.arange(len(y)), y]).mean(axis=1)
+    # Each epoch scored by the mean over the epochs within FOLD_CURVE_HALF_WINDOW of it (2 here).
+    window = [range(max(e - 2, 0), min(e + 3, 6)) for e in range(6)]
+    accuracy = np.array([accuracy[list(w)].mean() for w in window])
+    loss = np.array([loss[list(w)].mean() for w in window])
+    best = max(range(6), key=lambda e: (accuracy[e], -loss[e]))
+    assert model.best_epoch_ == best + 1 and model.n_epochs_ == best + 1        # the refit ran that many
+    np.testing.assert_allclose(model.fold_curve_["accuracy"], accuracy)
+    np.testing.assert_allclose(model.out_of_fold_proba_, proba[best], rtol=1e-4, atol=1e-5)
+    assert all("val_loss" not in record for record in model.history_)      # the refit: every training window
+
+
+def test_the_papers_rule_keeps_the_least_training_loss_and_validation_only_reports():
+    X, y = tones()
+    fit, held = np.arange(0, len(y), 2), np.arange(1, len(y), 2)
+    model = classifier(epoch_selection="train_loss", max_epochs=8, lr_plateau_patience=1, lr_factor=0.5)
+    model.fit(X[fit], y[fit], X[held], y[held])
+    losses = [record["train_loss"] for record in model.history_]
+    assert model.n_epochs_ == 8 and all("val_accuracy" in record for record in model.history_)   # every epoch run
+    assert model.best_epoch_ == int(np.argmin(losses)) + 1
+    # The kept weights are that epoch's: the same fit stopped there ends with them (nothing is chosen
+    # on validation; an unseeded difference would show in the probabilities).
+    stopped = classifier(epoch_selection="train_loss", max_epochs=model.best_epoch_, lr_plateau_patience=1,
+                         lr_factor=0.5).fit(X[fit], y[fit], X[held], y[held])
+    np.testing.assert_allclose(model.predict_proba(X), stopped.predict_proba(X), rtol=1e-5, atol=1e-6)
+    # Validation never steers it: with wrong validation labels (a validation loss that rises) the
+    # plateau, which would watch that loss under epoch_selection=validation, still follows the
+    # training loss, and the fit is the same network.
+    wrong = (y[held] + 1) % 3
+    other = classifier(epoch_selection="train_loss", max_epochs=8, lr_plateau_patience=1,
+                       lr_factor=0.5).fit(X[fit], y[fit], X[held], wrong)
+    assert [r["lr"] for r in other.history_] == [r["lr"] for r in model.history_]
+    np.testing.assert_allclose(other.predict_proba(X), model.predict_proba(X), rtol=1e-5, atol=1e-6)
+    watching = classifier(epoch_selection="validation", max_epochs=8, lr_plateau_patience=1,
+                          lr_factor=0.5).fit(X[fit], y[fit], X[held], wrong)
+    assert [r["lr"] for r in watching.history_] != [r["lr"] for r in model.history_]
 
 
 def test_a_set_with_two_or_one_recordings_per_class_trains(compose_config, tmp_path):
