@@ -38,7 +38,51 @@ from onnx import TensorProto, helper, numpy_helper  # noqa: E402
 
 from models.rocket.minirocket import N_KERNELS, dilations_and_features  # noqa: E402
 
-FORMULATIONS = ("greater_cast_mean", "sub_sign_sum", "greater_uint8_matmul", "binarizer_mean", "relu_min_sum")
+FORMULATIONS = ("greater_cast_mean", "sub_sign_sum", "greater_uint8_matmul", "binarizer_mean", "relu_min_sum",
+                "kernel_blocks", "time_blocks")
+BLOCK_ELEMENTS = 1 << 18   # comparisons per block in the blocked formulations: 1 MB of float 0/1, half of L2 here
+
+
+def blocked_nodes(formulation: str, biases: np.ndarray, length: int, k: int) -> tuple[list, list]:
+    """Greater -> Cast -> ReduceSum on blocks of at most BLOCK_ELEMENTS comparisons, so that
+    each node's output stays in cache: `kernel_blocks` splits the 84 kernels (a Split of the
+    outputs, each block against its biases, a Concat of the counts), `time_blocks` the L steps
+    (a Split along time, each block's partial counts added)."""
+    name, count = (lambda base: f"{base}{k}"), biases.shape[1]
+    per_row = count * length
+    inits = [numpy_helper.from_array(np.array([2], dtype=np.int64), name("axes")),
+             numpy_helper.from_array(np.float32(1.0 / length), name("scale"))]
+    nodes = []
+    if formulation == "kernel_blocks":
+        rows = max(1, BLOCK_ELEMENTS // per_row)
+        sizes = [min(rows, N_KERNELS - s) for s in range(0, N_KERNELS, rows)]
+        inits.append(numpy_helper.from_array(np.array(sizes, dtype=np.int64), name("sizes")))
+        nodes.append(helper.make_node("Split", [name("c"), name("sizes")], [name(f"c_{b}_") for b in range(len(sizes))], axis=0))
+        for b, start in enumerate(range(0, N_KERNELS, rows)):
+            block = f"{b}_{k}"
+            inits.append(numpy_helper.from_array(biases[start:start + rows, :, None].astype(np.float32), f"biases_{block}"))
+            nodes += [helper.make_node("Greater", [name(f"c_{b}_"), f"biases_{block}"], [f"above_{block}"]),
+                      helper.make_node("Cast", [f"above_{block}"], [f"above_f_{block}"], to=TensorProto.FLOAT),
+                      helper.make_node("ReduceSum", [f"above_f_{block}", name("axes")], [f"count_{block}"], keepdims=0)]
+        nodes.append(helper.make_node("Concat", [f"count_{b}_{k}" for b in range(len(sizes))], [name("total")], axis=0))
+    else:
+        steps = max(1, BLOCK_ELEMENTS // (N_KERNELS * count))
+        sizes = [min(steps, length - s) for s in range(0, length, steps)]
+        inits += [numpy_helper.from_array(np.array(sizes, dtype=np.int64), name("sizes")),
+                  numpy_helper.from_array(biases[:, :, None].astype(np.float32), name("biases"))]
+        nodes.append(helper.make_node("Split", [name("c"), name("sizes")], [name(f"c_{b}_") for b in range(len(sizes))], axis=2))
+        for b in range(len(sizes)):
+            block = f"{b}_{k}"
+            nodes += [helper.make_node("Greater", [name(f"c_{b}_"), name("biases")], [f"above_{block}"]),
+                      helper.make_node("Cast", [f"above_{block}"], [f"above_f_{block}"], to=TensorProto.FLOAT),
+                      helper.make_node("ReduceSum", [f"above_f_{block}", name("axes")], [f"count_{block}"], keepdims=0)]
+        partial = f"count_0_{k}"
+        for b in range(1, len(sizes)):
+            nodes.append(helper.make_node("Add", [partial, f"count_{b}_{k}"], [f"sum_{b}_{k}"]))
+            partial = f"sum_{b}_{k}"
+        nodes.append(helper.make_node("Identity", [partial], [name("total")]))
+    nodes.append(helper.make_node("Mul", [name("total"), name("scale")], [name("ppv")]))
+    return nodes, inits
 
 
 def count_nodes(formulation: str, biases: np.ndarray, length: int, k: int) -> tuple[list, list]:
@@ -50,6 +94,8 @@ def count_nodes(formulation: str, biases: np.ndarray, length: int, k: int) -> tu
     def const(base, value):
         return numpy_helper.from_array(np.asarray(value), name(base))
 
+    if formulation in ("kernel_blocks", "time_blocks"):
+        return blocked_nodes(formulation, biases, length, k)
     inits = [const("biases", biases[:, :, None].astype(np.float32)), const("axes", np.array([2], dtype=np.int64))]
     c, b, axes = name("c"), name("biases"), name("axes")
     if formulation == "greater_cast_mean":
@@ -100,16 +146,16 @@ def count_graph(formulation: str, biases: list, length: int) -> onnx.ModelProto:
     return helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18), helper.make_opsetid("ai.onnx.ml", 3)])
 
 
-def time_ms(session, feed, repeats: int) -> float:
+def time_ms(session, feed, repeats: int, clock=time.perf_counter) -> float:
     for _ in range(5):
         session.run(None, feed)
     medians = []
     for _ in range(repeats):
         calls = []
         for _ in range(50):
-            start = time.perf_counter()
+            start = clock()
             session.run(None, feed)
-            calls.append(time.perf_counter() - start)
+            calls.append(clock() - start)
         medians.append(1e3 * float(np.median(calls)))
     return float(np.median(medians))
 
@@ -118,12 +164,17 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--lengths", nargs="+", type=int, default=[150, 251, 427, 1460])
     parser.add_argument("--repeats", type=int, default=3)
+    parser.add_argument("--cpu-time", action="store_true",
+                        help="time each call by the process's CPU time, not the wall clock: on a loaded machine "
+                             "it leaves out the time other processes hold the core (not the cache they evict)")
+    parser.add_argument("--formulations", nargs="+", default=list(FORMULATIONS), choices=FORMULATIONS)
     args = parser.parse_args()
     rng = np.random.default_rng(0)
     options = ort.SessionOptions()
     options.intra_op_num_threads = options.inter_op_num_threads = 1
-    print("| length | dilations, features x L (comparisons) | " + " | ".join(FORMULATIONS) + " | load average |")
-    print("|---|---|" + "---|" * len(FORMULATIONS) + "---|")
+    clock = time.process_time if args.cpu_time else time.perf_counter
+    print("| length | dilations, features x L (comparisons) | " + " | ".join(args.formulations) + " | load average |")
+    print("|---|---|" + "---|" * len(args.formulations) + "---|")
     for length in args.lengths:
         _, counts = dilations_and_features(length, 9_996)
         outputs = [rng.normal(size=(N_KERNELS, 1, length)).astype(np.float32) for _ in counts]
@@ -131,12 +182,12 @@ def main():
         reference = np.concatenate([(c > b[:, :, None]).mean(axis=2) for c, b in zip(outputs, biases)], axis=1)
         feed = {f"c{k}": c for k, c in enumerate(outputs)}
         cells = []
-        for formulation in FORMULATIONS:
+        for formulation in args.formulations:
             session = ort.InferenceSession(count_graph(formulation, biases, length).SerializeToString(), options,
                                            providers=["CPUExecutionProvider"])
             ppv = session.run(None, feed)[0]
             assert np.abs(ppv - reference).max() <= 1.0 / length + 1e-6, formulation   # the same counts, up to a tie
-            cells.append(f"{time_ms(session, feed, args.repeats):.2f}")
+            cells.append(f"{time_ms(session, feed, args.repeats, clock):.2f}")
         print(f"| {length} | {len(counts)}, {reference.shape[1]} x {length} ({reference.size * length / 1e6:.1f} M) | "
               + " | ".join(cells) + f" | {os.getloadavg()[0]:.1f} |", flush=True)
 

@@ -97,7 +97,7 @@ def test_biases_own_outputs_and_inner_pooling_agree_with_the_whole_transform():
             rows = group.convolutions(torch.from_numpy(x)).numpy()[drawn, np.arange(len(group.dilations))[:, None],
                                                                     np.arange(84)]
             np.testing.assert_allclose(own, rows, rtol=0, atol=1e-5 * np.abs(rows).max())
-            padded_count = group._traced_features(torch.from_numpy(x), 1)
+            padded_count = group._traced_features(torch.from_numpy(x))
             np.testing.assert_array_equal(group(torch.from_numpy(x)).numpy(), padded_count.numpy())
 
 

@@ -144,24 +144,31 @@ class DilationGroup(nn.Module):
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         if torch.jit.is_tracing():  # export/torch_graphs.to_onnx traces: one batch of any size
-            comparisons = N_KERNELS * self.count * x.shape[-1]                  # per window and dilation
-            return self._traced_features(x, max(1, COMPARISON_ELEMENTS // comparisons))
-        # eager (fit and predict run batches of many windows): a few windows at a time
+            return self._traced_features(x)
+        # eager (fit and predict run batches of many windows): a few windows at a time as well
         length = x.shape[-1]
         windows = max(1, min(CONVOLUTION_ELEMENTS // (len(self.dilations) * (N_KERNELS + KERNEL_LENGTH * self.n_channels)
                                                        * length),
                              COMPARISON_ELEMENTS // (N_KERNELS // 2 * self.count * length)))
         return torch.cat([self._eager_features(part) for part in x.split(windows)])
 
-    def _traced_features(self, x: torch.Tensor, step: int) -> torch.Tensor:
-        """PPV features [batch, D x 84 x count], `step` dilations at a time so that their
-        comparisons stay in cache: Greater, Cast, ReduceSum."""
+    def _traced_features(self, x: torch.Tensor) -> torch.Tensor:
+        """PPV features [batch, D x 84 x count]: Greater, Cast, ReduceSum on as many dilations at
+        a time as keep their comparisons in cache, or, where one dilation's do not (84 x count x
+        length above COMPARISON_ELEMENTS), on blocks of its kernels."""
         outputs = self.convolutions(x) + self.pool_offset                         # [batch, D, 84, length]
-        features = []
+        per_kernel = self.count * x.shape[-1]
+        kernels = min(N_KERNELS, max(1, COMPARISON_ELEMENTS // per_kernel))
+        step = max(1, COMPARISON_ELEMENTS // (N_KERNELS * per_kernel))
+        counts = []
         for j in range(0, outputs.shape[1], step):
-            counts = (outputs[:, j:j + step].unsqueeze(3) > self.biases[j:j + step]).float().sum(-1)
-            features.append(counts * self.pool_scale[j:j + step])                # [batch, step, 84, count]
-        return torch.cat(features, 1).flatten(1)
+            for k in range(0, N_KERNELS, kernels):
+                above = outputs[:, j:j + step, k:k + kernels].unsqueeze(3) > self.biases[j:j + step, k:k + kernels]
+                counts.append(above.float().sum(-1))                              # [batch, step, kernels, count]
+        if kernels < N_KERNELS:
+            counts = [torch.cat(counts[i:i + len(range(0, N_KERNELS, kernels))], 2)
+                      for i in range(0, len(counts), len(range(0, N_KERNELS, kernels)))]
+        return (torch.cat(counts, 1) * self.pool_scale).flatten(1)
 
     def _eager_features(self, x: torch.Tensor) -> torch.Tensor:
         """The same features in torch, at each dilation the 42 kernels pooled over the whole
