@@ -100,7 +100,8 @@ class DilationGroup(nn.Module):
         self.padding = 4 * max(dilations)
         channel_start = (length + 2 * self.padding) * torch.arange(n_channels)[None, :, None, None]
         # into the channels' zero-padded inputs laid end to end: [D, channels x 9, length], channel-major
-        self.register_buffer("shift_index", (channel_start + self.padding + shifts + torch.arange(length)).flatten(1, 2))
+        index = channel_start + self.padding + shifts + torch.arange(length)
+        self.register_buffer("shift_index", index.flatten(1, 2))
         self.register_buffer("channel_mask", torch.ones(n_channels, len(dilations), N_KERNELS, 1))
         self.register_buffer("biases", torch.zeros(len(dilations), N_KERNELS, count, 1))
         # the paper alternates, from the first dilation on, kernels pooled over the whole output and over the inner part
@@ -124,7 +125,7 @@ class DilationGroup(nn.Module):
         padded = nn.functional.pad(x, (self.padding, self.padding)).flatten(1)    # [batch, channels x padded]
         # index_select on the flat index: torch's advanced indexing took twice as long; both are one Gather in the graph
         copies = padded.index_select(1, self.shift_index.flatten()).view(-1, *self.shift_index.shape)
-        return torch.matmul(self.kernel_weights(), copies)                       # copies [batch, D, channels x 9, length]
+        return torch.matmul(self.kernel_weights(), copies)               # copies [batch, D, channels x 9, length]
 
     def own_outputs(self, x: torch.Tensor) -> torch.Tensor:
         """Each (dilation, kernel)'s output on its own window only, `x` [D, 84, channels, length]
@@ -147,8 +148,8 @@ class DilationGroup(nn.Module):
             return self._traced_features(x)
         # eager (fit and predict run batches of many windows): a few windows at a time as well
         length = x.shape[-1]
-        windows = max(1, min(CONVOLUTION_ELEMENTS // (len(self.dilations) * (N_KERNELS + KERNEL_LENGTH * self.n_channels)
-                                                       * length),
+        per_window = len(self.dilations) * (N_KERNELS + KERNEL_LENGTH * self.n_channels) * length   # outputs, copies
+        windows = max(1, min(CONVOLUTION_ELEMENTS // per_window,
                              COMPARISON_ELEMENTS // (N_KERNELS // 2 * self.count * length)))
         return torch.cat([self._eager_features(part) for part in x.split(windows)])
 
