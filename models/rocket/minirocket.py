@@ -13,7 +13,7 @@ shared by all 84 kernels, whose outputs are one matrix product of their -1/+2 we
 channel, the channel combination folded in as zero weights) with the copies. The paper's own
 shortcut, 3 x_a + (3 x_b + (3 x_c - total)) on shared pair sums, one addition per output, ran
 slower as separate tensor operations: 3.5x slower in torch at 427 and 1,460 steps, and the
-exported graph 1.2-1.3x slower in onnxruntime at 150-1,460 steps (measured side by side, CPU time
+exported graph 1.2-1.4x slower in onnxruntime at 150-1,460 steps (measured side by side, CPU time
 at load ~15): each of its operations is a pass over memory, where the matrix product keeps its
 nine terms in registers. Every product w x is exact (w is -1, 0 or 2), so an output differs
 between the two only by the order of its nine additions.
