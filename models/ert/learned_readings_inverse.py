@@ -17,7 +17,7 @@ Training presses come from `n_training_sensors` simulated sensors (seeds `traini
 never the sensor under test: runs/studies/ert_tests.py refuses a collision) through
 GreitReconstruction.training_frames, the one simulator of other sensors' presses, reduced to u
 sensor by sensor. The amount matters most: 40 sensors x 1,000 presses instead of 20 x 500 took
-one boundary sensor from 3.35 to 2.79 mm at 10 N, 80 instead of 40 another 5 % (docs/ert.md);
+one boundary sensor from 3.35 to 2.79 mm at 10 N, 80 instead of 40 another 3 % (docs/ert.md);
 a wider net (256) trained longer (60 epochs) did worse (3.00 mm). `fit(X, y)`
 receives validation presses of the sensor under test (a calibration recording): only the noise
 weight lambda is chosen there, by one net per weight; the networks never see them. At that
