@@ -188,6 +188,14 @@ def test_auto_head_switches_by_the_number_of_training_windows():
     assert fitted(X, y, n_features=168, ridge_max_samples=len(X) - 1).head_ == "logistic"
 
 
+def test_parameter_count_holds_every_bias_and_the_folded_head():
+    X, y = tones()
+    model = fitted(X, y, n_features=840)
+    n_features = model.transform(X).shape[1]              # one bias per MiniRocket feature
+    head = sum(p.numel() for p in model.module_.head.parameters())
+    assert model.n_parameters_ == n_features + head
+
+
 def test_estimator_contract_and_seed():
     check_no_attributes_set_in_init("RocketClassifier", RocketClassifier())
     check_parameters_default_constructible("RocketClassifier", RocketClassifier())

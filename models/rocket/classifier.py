@@ -181,5 +181,5 @@ class RocketClassifier(BaseEstimator, ClassifierMixin):
     def n_parameters_(self) -> int:
         """Learned numbers: the biases and the folded head (the kernels are fixed, the channel
         combinations drawn)."""
-        return int(sum(b.numel() for name, b in self.module_.named_buffers() if name.startswith("biases_"))
+        return int(sum(b.numel() for name, b in self.module_.named_buffers() if name.rsplit(".", 1)[-1] == "biases")
                    + sum(p.numel() for p in self.module_.head.parameters()))
