@@ -24,11 +24,11 @@ epoch, the plateau on the training loss, the epoch of least training loss kept; 
 given are only scored); `folds` (trainer=reference) trains once per stratified fold of the training
 recordings (data/splits/indices.py stratified_folds) as the refit will train (the plateau on the
 training loss, the held-out fold only scored, at every epoch), takes the epoch of the best held-out
-accuracy pooled over the folds (averaged over 11 epochs around it), and refits on every training window for that many epochs: the
+accuracy pooled over the folds (averaged over it and the 10 epochs before it), and refits on every training window for that many epochs: the
 epoch count rests on every training recording instead of a small set's 8-10 validation recordings,
 the model is fitted on all of them, and the validation split stays untouched for reporting and for
 choosing between models. (Each fold early-stopped on its own few held-out recordings stopped at a
-lucky early peak: 13-25 epochs where ArrowHead's refit needs about 100; docs/training_recipes.md.)
+lucky early peak: 7-25 epochs where ArrowHead's refit needs about 100; docs/training_recipes.md.)
 The folds' held-out predictions at the chosen epoch (`out_of_fold_proba_`, each training window
 predicted by a fit that never saw its recording; `out_of_fold_method_` says how) are kept: a run
 whose validation side is empty (every class has one training recording) reports them as its
@@ -78,10 +78,11 @@ OPTIMISERS = ("sgd", "adam")
 SCHEDULES = ("milestones", "plateau")
 EPOCH_SELECTIONS = ("validation", "folds", "train_loss")
 # epoch_selection=folds scores each epoch by the pooled held-out accuracy (and loss) averaged over
-# the epochs within this many of it: on ArrowHead's 36 recordings the single best epoch was a spike
-# (epoch 67, pooled 0.83, its refit 0.73 on test) where every window of 11-63 epochs chose 124-133
-# (refit 0.83-0.86; docs/training_recipes.md).
-FOLD_CURVE_HALF_WINDOW = 5
+# it and the epochs before it, this many in all: on ArrowHead's 36 recordings the single best epoch
+# was a spike (seed 0: epoch 67, pooled 0.83, its refit 0.73 on test) where windows of 5-21 epochs
+# chose 148-160 (refit 0.82-0.84); trailing, so a curve still rising when the budget ends chooses
+# its last epoch (docs/training_recipes.md).
+FOLD_CURVE_WINDOW = 11
 # What a checkpoint must agree on with the fit that resumes it (max_epochs may grow: a run can
 # be extended; device and progress do not change the result).
 RESUME_KEYS = ("optimizer", "lr", "momentum", "weight_decay", "lr_schedule", "milestones", "gamma", "lr_factor",
@@ -293,7 +294,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
 
     def _fit_on_folds(self, X, y, n_classes, epoch_callback, groups):
         """Epoch count = the epoch of the best pooled held-out accuracy (ties: lower pooled held-out
-        loss), each averaged over the epochs within FOLD_CURVE_HALF_WINDOW, of folds trained as the refit trains: the plateau on the training loss, the held-out
+        loss), each averaged over it and the epochs before it (FOLD_CURVE_WINDOW), of folds trained as the refit trains: the plateau on the training loss, the held-out
         recordings only scored at every epoch, so fold and refit follow one schedule. A fold that
         stopped early (its training loss no longer falls by early_stopping_min_delta) keeps its last
         held-out predictions for the later epochs."""
@@ -308,13 +309,15 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
                         member_callback(epoch_callback, f"fold{k}"), int(self.max_epochs))
             curves.append(np.stack(fold.held_out_proba_))          # (epochs run, held-out windows, classes)
         n_epochs = max(len(curve) for curve in curves)
-        proba = np.zeros((n_epochs, len(X), n_classes))
+        # Every epoch's held-out probabilities (float32): epochs x windows x classes, 1500 x 3,000 x 10
+        # would be 180 MB; a set of many windows per recording should lower trainer.max_epochs.
+        proba = np.zeros((n_epochs, len(X), n_classes), dtype=np.float32)
         for (_, held_rows), curve in zip(folds, curves):
             proba[:, held_rows] = np.concatenate([curve, np.repeat(curve[-1:], n_epochs - len(curve), axis=0)])
-        accuracy, loss = (self._smoothed(score, FOLD_CURVE_HALF_WINDOW) for score in self._held_out_scores(proba, y))
+        accuracy, loss = (self._trailing_mean(score, FOLD_CURVE_WINDOW) for score in self._held_out_scores(proba, y))
         best = max(range(n_epochs), key=lambda e: (accuracy[e], -loss[e]))
         epochs = best + 1
-        self.out_of_fold_proba_ = proba[best]
+        self.out_of_fold_proba_ = proba[best].astype(np.float64)
         self.fold_epochs_run_ = [len(curve) for curve in curves]
         self.fold_best_epochs_ = []   # each fold alone (its own best held-out epoch), to show their spread
         for (_, held_rows), curve in zip(folds, curves):
@@ -323,19 +326,19 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         self.fold_curve_ = {"accuracy": accuracy.tolist(), "loss": loss.tolist()}
         self.out_of_fold_method_ = f"{len(folds)} stratified folds at epoch {epochs}"
         log.info("epochs chosen on %d stratified folds' pooled held-out curve: epoch %d (held-out accuracy %.3f, "
-                 "loss %.4f, averaged over 11 epochs; of %d run); refitting on all %d windows", len(folds), epochs, accuracy[best], loss[best],
+                 "loss %.4f, each the mean of 11 epochs to it; of %d run); refitting on all %d windows", len(folds), epochs, accuracy[best], loss[best],
                  n_epochs, len(X))
         self._train(X, y, None, None, n_classes, epoch_callback, epochs)
         self.best_epoch_ = epochs
         return self
 
     @staticmethod
-    def _smoothed(values, half: int) -> np.ndarray:
-        """Each value replaced by the mean of those within `half` places of it (fewer at the ends)."""
+    def _trailing_mean(values, window: int) -> np.ndarray:
+        """Each value replaced by the mean of it and the values before it, `window` in all (fewer at the start)."""
         sums = np.concatenate([[0.0], np.cumsum(values)])
         index = np.arange(len(values))
-        low, high = np.maximum(index - half, 0), np.minimum(index + half + 1, len(values))
-        return (sums[high] - sums[low]) / (high - low)
+        low = np.maximum(index + 1 - window, 0)
+        return (sums[index + 1] - sums[low]) / (index + 1 - low)
 
     @staticmethod
     def _held_out_scores(curve, y):

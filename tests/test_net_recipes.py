@@ -65,7 +65,7 @@ def test_carving_validation_keeps_a_training_recording_of_every_class():
 
 
 def test_the_folds_choose_the_epoch_of_the_best_pooled_held_out_accuracy(monkeypatch):
-    monkeypatch.setattr(timeseries_classifier, "FOLD_CURVE_HALF_WINDOW", 2)   # a window that fits in 6 epochs
+    monkeypatch.setattr(timeseries_classifier, "FOLD_CURVE_WINDOW", 3)   # a window that fits in 6 epochs
     X, y = tones()
     model = classifier(epoch_selection="folds", n_folds=2, max_epochs=6).fit(X, y)
     # By hand: each fold's network after e epochs, trained as the refit trains (the plateau on the
@@ -77,8 +77,8 @@ def test_the_folds_choose_the_epoch_of_the_best_pooled_held_out_accuracy(monkeyp
             proba[e - 1, held] = classifier(max_epochs=e).fit(X[fit], y[fit]).predict_proba(X[held])
     accuracy = (proba.argmax(axis=2) == y).mean(axis=1)
     loss = -np.log(proba[:, np.arange(len(y)), y]).mean(axis=1)
-    # Each epoch scored by the mean over the epochs within FOLD_CURVE_HALF_WINDOW of it (2 here).
-    window = [range(max(e - 2, 0), min(e + 3, 6)) for e in range(6)]
+    # Each epoch scored by the mean over it and the epochs before it, FOLD_CURVE_WINDOW in all (3 here).
+    window = [range(max(e - 2, 0), e + 1) for e in range(6)]
     accuracy = np.array([accuracy[list(w)].mean() for w in window])
     loss = np.array([loss[list(w)].mean() for w in window])
     best = max(range(6), key=lambda e: (accuracy[e], -loss[e]))
