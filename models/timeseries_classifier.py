@@ -324,7 +324,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             fold_accuracy, fold_loss = self._held_out_scores(curve, y[held_rows])
             self.fold_best_epochs_.append(max(range(len(curve)), key=lambda e: (fold_accuracy[e], -fold_loss[e])) + 1)
         self.fold_curve_ = {"accuracy": accuracy.tolist(), "loss": loss.tolist()}
-        self.out_of_fold_method_ = f"{len(folds)} stratified folds at epoch {epochs}"
+        self.out_of_fold_method_ = f"{len(folds)} stratified folds"   # the epoch: best_epoch_
         log.info("epochs chosen on %d stratified folds' pooled held-out curve: epoch %d (held-out accuracy %.3f, "
                  "loss %.4f, each the mean of 11 epochs to it; of %d run); refitting on all %d windows", len(folds), epochs, accuracy[best], loss[best],
                  n_epochs, len(X))
