@@ -31,6 +31,7 @@ from omegaconf import OmegaConf
 from common.errors import InputError
 from models.classic_classifiers import TableClassifier
 from models.deployable import table_classifier_pipeline, timeseries_pipeline
+from models.rocket.classifier import RocketClassifier
 from models.validation_choice import ValidationChoice
 from runs.report.classification_report import write_classification_report
 from runs.regression import chosen
@@ -124,15 +125,29 @@ def _recording_groups(model, datamodule) -> dict:
     return {"groups": datamodule.train_window_recording}
 
 
-def _scores_on_training(choice: ValidationChoice, datamodule) -> bool:
-    """Whether the default model trains its candidates on every training recording and scores them on
-    their held-out predictions (model.score_on=auto: where the validation recordings were carved from
-    the training recordings the file declares, and every training window belongs to a recording, so
-    none is virtual)."""
-    if choice.score_on != "auto":
-        return choice.score_on == "training"
+def _validation_can_join_training(datamodule) -> bool:
+    """The validation recordings were carved from the training recordings the file declares, and every
+    training window belongs to a recording (none is virtual), so a model that holds recordings out
+    itself can train on all of them."""
     return (getattr(datamodule, "validation_carved", False) and len(datamodule.y_val) > 0
             and len(datamodule.train_window_recording) == len(datamodule.y_train))
+
+
+def _scores_on_training(choice: ValidationChoice, datamodule) -> bool:
+    """Whether the default model trains its candidates on every training recording and scores them on
+    their held-out predictions (model.score_on=auto: where validation can join training)."""
+    if choice.score_on != "auto":
+        return choice.score_on == "training"
+    return _validation_can_join_training(datamodule)
+
+
+def _holds_out_its_training(model) -> bool:
+    """A chosen recordings model that scores itself on held-out predictions of every training
+    recording: a net choosing its epoch count on folds (trainer=reference) or a ROCKET member (the
+    ridge head's leave-one-out). Like the default model, it then trains on every training recording
+    the file declares instead of the 80 % left by the validation carve (issue 27: on ArrowHead 36,
+    not 28)."""
+    return isinstance(model, RocketClassifier) or model.get_params().get("epoch_selection") == "folds"
 
 
 def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> ClassificationResult:
@@ -161,10 +176,13 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
             choice.set_candidate_params(modalities=datamodule.modality_channels)
         if pooled:   # a net's held-out predictions are those of the folds that choose its epochs
             choice.set_candidate_params(epoch_selection="folds")
-            X_fit, y_fit = np.concatenate([X_train, X_val]), np.concatenate([y_train, y_val])
-            fit_recordings = np.concatenate([fit_recordings, datamodule.val_window_recording])
-            if fit_levels is not None and datamodule.val_levels_per_window is not None:
-                fit_levels = np.concatenate([fit_levels, datamodule.val_levels_per_window])
+    elif not table:
+        pooled = _holds_out_its_training(model) and _validation_can_join_training(datamodule)
+    if pooled:
+        X_fit, y_fit = np.concatenate([X_train, X_val]), np.concatenate([y_train, y_val])
+        fit_recordings = np.concatenate([fit_recordings, datamodule.val_window_recording])
+        if fit_levels is not None and datamodule.val_levels_per_window is not None:
+            fit_levels = np.concatenate([fit_levels, datamodule.val_levels_per_window])
     if "modalities" in model.get_params():
         model.set_params(modalities=datamodule.modality_channels)
     if "checkpoint_path" in model.get_params():  # resumable training (docs/training_recipes.md)

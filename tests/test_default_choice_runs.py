@@ -128,3 +128,23 @@ def test_a_declared_train_test_split_chooses_on_held_out_training_predictions_an
     assert first_test > 0 and not any(row.tobytes() in test_rows for _, _, X in seen[:first_test] for row in X)
     again = run(compose_config(overrides), tmp_path / "again")   # same seed, same choice and scores
     assert again["choice"]["validation"] == choice["validation"] and again["test"] == metrics["test"]
+
+
+@pytest.mark.parametrize("chosen_model, holds_out_itself", [(["model=minirocket", "model.n_features=840"], True),
+                                                            (["model=prcnn", "trainer=reference"], True),
+                                                            (["model=prcnn", "trainer=tsc"], False)])
+def test_a_chosen_model_that_holds_out_itself_trains_on_every_declared_training_recording(
+        compose_config, tmp_path, chosen_model, holds_out_itself):
+    """A ROCKET member (leave-one-out) or a net choosing its epochs on folds (trainer=reference)
+    trains on all 24 declared training recordings and is scored on its held-out predictions of
+    them; a net early-stopped on validation (trainer=tsc) still needs the carved ones."""
+    declared_train_test(tmp_path / "rig.npz")
+    overrides = ["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "trainer.max_epochs=2",
+                 "trainer.progress=false", "cost.onnx_latency_calls=0", *chosen_model]
+    metrics = run(compose_config(overrides), tmp_path / "run")
+    n_carved = metrics["data"]["n_val_recordings"]
+    assert metrics["data"]["n_train_recordings"] + n_carved == 24 and n_carved > 0
+    if holds_out_itself:
+        assert metrics["data"]["n_fit_recordings"] == 24 and "trained on every one" in metrics["data"]["validation"]
+    else:
+        assert "n_fit_recordings" not in metrics["data"]
