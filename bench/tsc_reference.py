@@ -79,7 +79,7 @@ def batchnorm_check(seeds, n: int = 100, epochs: int = 15) -> None:
 
 def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool) -> None:
     import numpy as np
-    data = np.load(path, allow_pickle=True)
+    data = np.load(path, allow_pickle=False)   # a user's file: never unpickled
     classes, y_all = np.unique(data["y"], return_inverse=True)
     train, test = data["split"] == "train", data["split"] == "test"
     X, y, X_test, y_test = data["X"][train], y_all[train], data["X"][test], y_all[test]
