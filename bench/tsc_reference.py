@@ -4,15 +4,19 @@
         [--models prcnn rescnn inceptiontime lstm_fcn] [--epochs 150] [--n 300] [--seeds 0] [--trainer tsc]
     OMP_NUM_THREADS=1 .venv/bin/python bench/tsc_reference.py --batchnorm-check --seeds 0 1 2
     OMP_NUM_THREADS=1 .venv/bin/python bench/tsc_reference.py --epoch-curve ArrowHead.npz --models rescnn
-        [--epochs 1500] [--every 5] [--seeds 0 1 2] [--skip-folds]
+        [inceptiontime inceptiontime_ensemble] [--epochs 1500] [--curve-epochs 300] [--every 5] [--seeds 0 1 2]
+        [--skip-folds]
 
 --epoch-curve: on a recordings NPZ with a declared train/test split (X, y, split; bench/tsc_peers.py
 writes the UCR/UEA sets so), how test accuracy depends on the epoch count the refit trains for,
 and which count the reference recipe's folds choose. One fit on every training recording as the
 refit trains (the plateau on the training loss, no early stopping), its test accuracy logged every
---every epochs: the refit for E epochs IS this fit's network at epoch E (same seed, same schedule).
-Then (unless --skip-folds) the whole `trainer=reference` fit: the folds' choice, their pooled
-held-out accuracy there, the refit's test accuracy and fit time.
+--every epochs, for --curve-epochs epochs (0: no curve): the refit for E epochs IS this fit's network
+at epoch E (same seed, same schedule). Then (unless --skip-folds) the whole `trainer=reference` fit,
+as `python train.py data=recordings_npz data.path=<NPZ> model=<m> trainer=reference` fits it (the
+folds' budget --epochs, default the trainer's 1500): the folds' choice, their pooled held-out
+accuracy there, the refit's test accuracy, fit wall and CPU time (one JSON line per fit; the mean
+and sd over the seeds at the end).
 
 Generated data whose optimal accuracy is known (no public archive can be downloaded here):
   frequency  1 channel: a sine of 3 or 5 cycles per series at a random phase, plus noise.
@@ -77,7 +81,9 @@ def batchnorm_check(seeds, n: int = 100, epochs: int = 15) -> None:
                   f"| {(model.predict(X[test]) == y[test]).mean():.3f} |")
 
 
-def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool) -> None:
+def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool, curve_epochs: int) -> None:
+    import json
+
     import numpy as np
     data = np.load(path, allow_pickle=False)   # a user's file: never unpickled
     classes, y_all = np.unique(data["y"], return_inverse=True)
@@ -85,36 +91,54 @@ def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool) 
     X, y, X_test, y_test = data["X"][train], y_all[train], data["X"][test], y_all[test]
     print(f"{Path(path).stem}: {train.sum()} training / {test.sum()} test recordings, {X.shape[2]} steps, "
           f"{len(classes)} classes; 1-minute load average {os.getloadavg()[0]:.1f}")
+    results = {}
     for model in models:
         for seed in seeds:
-            estimator = reference_model(model, epochs, seed, ["trainer.epoch_selection=train_loss",
-                                                              "trainer.early_stopping_patience=null"])
-            curve = []
+            if curve_epochs:
+                estimator = reference_model(model, curve_epochs, seed, ["trainer.epoch_selection=train_loss",
+                                                                        "trainer.early_stopping_patience=null"])
+            if curve_epochs and estimator.ensemble_size > 1:
+                print(f"{model}: no curve (an ensemble has no network to score until every member is trained; "
+                      "its members' curves are --models inceptiontime at seeds seed, seed+1, ...)")
+            elif curve_epochs:
+                curve = []
 
-            def logged(record, estimator=estimator, curve=curve):
-                if record["epoch"] % every == 0:
-                    curve.append((record["epoch"], float((estimator.predict(X_test) == y_test).mean())))
-            estimator.fit(X, y, epoch_callback=logged)
-            print(f"{model} seed {seed}, test accuracy of the refit for E epochs: "
-                  + " ".join(f"{e}:{a:.3f}" for e, a in curve), flush=True)
+                def logged(record, estimator=estimator, curve=curve):
+                    if record["epoch"] % every == 0:
+                        curve.append((record["epoch"], float((estimator.predict(X_test) == y_test).mean())))
+                estimator.fit(X, y, epoch_callback=logged)
+                print(f"{model} seed {seed}, test accuracy of the refit for E epochs: "
+                      + " ".join(f"{e}:{a:.3f}" for e, a in curve), flush=True)
             if folds:
                 chosen = reference_model(model, epochs, seed)
-                start = time.perf_counter()
+                load_before, start, cpu_start = os.getloadavg()[0], time.perf_counter(), time.process_time()
                 chosen.fit(X, y)
-                fit_s = time.perf_counter() - start
-                best = chosen.best_epoch_
-                print(f"{model} seed {seed}, trainer=reference: folds ran {chosen.fold_epochs_run_} epochs, chose {best} "
-                      f"(pooled held-out accuracy over 11 epochs {chosen.fold_curve_['accuracy'][best - 1]:.3f}; each fold alone "
-                      f"{chosen.fold_best_epochs_}); refit test accuracy "
-                      f"{(chosen.predict(X_test) == y_test).mean():.3f}, fit {fit_s:.0f} s at load "
-                      f"{os.getloadavg()[0]:.1f}", flush=True)
+                fit_s, fit_cpu_s = time.perf_counter() - start, time.process_time() - cpu_start
+                accuracy = float((chosen.predict(X_test) == y_test).mean())
+                results.setdefault(model, []).append(accuracy)
+                # An ensemble (model.ensemble_size > 1): its members' choices, one list each.
+                ensemble = isinstance(chosen.best_epoch_, list)
+                pooled = "" if ensemble else \
+                    f" (pooled held-out accuracy over 11 epochs {chosen.fold_curve_['accuracy'][chosen.best_epoch_ - 1]:.3f})"
+                print(f"{model} seed {seed}, trainer=reference: folds ran {chosen.fold_epochs_run_} epochs, chose "
+                      f"{chosen.best_epoch_}{pooled}; each fold alone {chosen.fold_best_epochs_}; refit test accuracy "
+                      f"{accuracy:.3f}, fit {fit_s:.0f} s wall, {fit_cpu_s:.0f} s CPU, at load "
+                      f"{load_before:.1f}-{os.getloadavg()[0]:.1f}", flush=True)
+                print(json.dumps({"set": Path(path).stem, "model": model, "seed": seed, "test_accuracy": accuracy,
+                                  "epochs": chosen.best_epoch_, "fold_epochs_run": chosen.fold_epochs_run_,
+                                  "fit_s": round(fit_s, 1), "fit_cpu_s": round(fit_cpu_s, 1),
+                                  "load": [round(load_before, 1), round(os.getloadavg()[0], 1)]}), flush=True)
+    for model, accuracies in results.items():
+        print(f"{Path(path).stem} {model}: refit test accuracy {np.mean(accuracies):.3f} +- {np.std(accuracies, ddof=1 if len(accuracies) > 1 else 0):.3f} "
+              f"over seeds {list(seeds)}", flush=True)
 
 
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--tasks", nargs="*", default=list(TASKS), choices=TASKS)
-    parser.add_argument("--models", nargs="*", default=list(MODELS), choices=MODELS)
-    parser.add_argument("--epochs", type=int, default=150, help="the same epoch budget for every network")
+    parser.add_argument("--models", nargs="*", default=list(MODELS), choices=(*MODELS, "inceptiontime_ensemble"))
+    parser.add_argument("--epochs", type=int, help="the same epoch budget for every network (default: 150; "
+                        "--epoch-curve: trainer=reference's own 1500, as train.py runs it)")
     parser.add_argument("--n", type=int, default=300, help="series per task (60/20/20 split)")
     parser.add_argument("--seeds", nargs="*", type=int, default=[0])
     parser.add_argument("--trainer", default="reference", choices=("reference", "tsc"),
@@ -125,11 +149,15 @@ def main(argv=None):
                         help="test accuracy against the refit's epoch count on a recordings NPZ (see above)")
     parser.add_argument("--every", type=int, default=5, help="--epoch-curve: test accuracy every this many epochs")
     parser.add_argument("--skip-folds", action="store_true", help="--epoch-curve: the curve alone")
+    parser.add_argument("--curve-epochs", type=int, default=300,
+                        help="--epoch-curve: the curve's length (every epoch runs); 0: the recipe alone")
     args = parser.parse_args(argv)
     if args.batchnorm_check:
         return batchnorm_check(args.seeds)
     if args.epoch_curve:
-        return epoch_curve(args.epoch_curve, args.models, args.seeds, args.epochs, args.every, not args.skip_folds)
+        return epoch_curve(args.epoch_curve, args.models, args.seeds, args.epochs or 1500, args.every,
+                           not args.skip_folds, args.curve_epochs)
+    args.epochs = args.epochs or 150
     rows = []
     for task in args.tasks:
         for model in args.models:

@@ -368,6 +368,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         if self.epoch_selection == "folds":
             self.out_of_fold_proba_ = np.mean([member.out_of_fold_proba_ for member in members], axis=0)
             self.fold_best_epochs_ = [member.fold_best_epochs_ for member in members]
+            self.fold_epochs_run_ = [member.fold_epochs_run_ for member in members]
             self.out_of_fold_method_ = f"{members[0].out_of_fold_method_}, {len(members)} members averaged"
         self.n_features_in_ = X.shape[1]
         return self
