@@ -152,6 +152,14 @@ def test_the_ensemble_averages_its_members_probabilities():
     np.testing.assert_allclose(alone.predict_proba(X), each[1], rtol=1e-4, atol=1e-5)   # member 1 is the seed-1 fit
 
 
+def test_an_ensemble_on_folds_keeps_each_members_choice():
+    X, y = tones()
+    model = classifier(ensemble_size=2, max_epochs=3, epoch_selection="folds", n_folds=2).fit(X, y)
+    member1 = classifier(max_epochs=3, epoch_selection="folds", n_folds=2, seed=1).fit(X, y)
+    assert len(model.fold_epochs_run_) == len(model.best_epoch_) == 2     # one entry per member
+    assert model.fold_epochs_run_[1] == member1.fold_epochs_run_ and model.best_epoch_[1] == member1.best_epoch_
+
+
 def test_the_ensemble_exports_to_one_onnx_graph_that_matches_eager(tmp_path):
     model, X = fitted_ensemble()
     pipeline = TimeSeriesPipeline(["tone"], ["0", "1", "2"], None, 1, X.shape[2], np.zeros((1, 1, 1)),
