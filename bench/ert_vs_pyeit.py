@@ -63,9 +63,12 @@ THRESHOLDS = (0.3, 0.5, 0.7)
 PYEIT_LAMBDAS = (1e-3, 1e-2, 1e-1)
 
 
-def scene_cfg(layout: str, noise_v: float):
+def scene_cfg(layout: str, noise_v: float, overrides=()):
+    """The run's config for `layout` at adc noise `noise_v`; `overrides`: further Hydra overrides
+    (small scenes for tests)."""
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
-        cfg = compose("config", overrides=[f"scene={layout}", "seed=0", f"scene.effects.adc_noise.noise_v={noise_v}"])
+        cfg = compose("config", overrides=[f"scene={layout}", "seed=0", f"scene.effects.adc_noise.noise_v={noise_v}",
+                                           *overrides])
     return cfg
 
 
