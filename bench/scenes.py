@@ -5,13 +5,20 @@ adds, and whether cost grows linearly with the sample count.
     .venv/bin/python bench/scenes.py --n 2000 --scenes rubber12_lab
 
 Marginal cost: effects are added one at a time, in the full list's order, on top of the
-minimal list; each row is the time that effect added per 1000 samples. Best of --repeats runs.
+minimal list; each row is the time that effect added per 1000 samples.
+
+Every figure is a mean +- sd over --repeats runs, run k at scene seed k (each seed draws its own
+presses, specimen and noise), timed by the process's CPU time: the scenes run on one thread, so
+on an idle machine it equals the wall time, and on a shared one it does not count the time other
+processes held the core. The 1-minute load average is printed beside each scene.
 """
 import argparse
+import os
 import sys
 import time
 from pathlib import Path
 
+import numpy as np
 from hydra import compose, initialize_config_dir
 from hydra.utils import instantiate
 from omegaconf import OmegaConf
@@ -51,15 +58,20 @@ def n_generated(result) -> int:
     return len(result.frame) if hasattr(result, "frame") else len(result)
 
 
-def seconds(cfg, repeats: int) -> float:
-    """Best wall time per generated sample over `repeats` runs."""
-    best = float("inf")
-    for _ in range(repeats):
-        scene = instantiate(cfg)
-        start = time.perf_counter()
+def seconds(cfg, repeats: int) -> np.ndarray:
+    """CPU seconds per generated sample, one run per scene seed 0 .. repeats - 1."""
+    per_sample = []
+    for seed in range(repeats):
+        scene = instantiate(cfg, seed=seed)
+        start = time.process_time()
         count = n_generated(scene.generate())
-        best = min(best, (time.perf_counter() - start) / count)
-    return best
+        per_sample.append((time.process_time() - start) / count)
+    return np.array(per_sample)
+
+
+def spread(values: np.ndarray, digits: int = 0) -> str:
+    """'mean +- sd' of `values` with `digits` decimals and thousands separators."""
+    return f"{values.mean():,.{digits}f} ± {values.std(ddof=1) if len(values) > 1 else 0.0:,.{digits}f}"
 
 
 def main(argv=None):
@@ -75,23 +87,25 @@ def main(argv=None):
         full_cfg, minimal_cfg = load(full, n), load(minimal, n)
         seconds(load(full, 10), 1)  # warm-up: solver factorisations are cached per process
         t_full, t_min = seconds(full_cfg, args.repeats), seconds(minimal_cfg, args.repeats)
-        print(f"\n## {full} (~{n} samples, best of {args.repeats})\n")
+        print(f"\n## {full} (~{n} samples; seeds 0-{args.repeats - 1}, mean ± sd; "
+              f"load average {os.getloadavg()[0]:.1f})\n")
         print("| effect list | effects | samples/s |\n|---|---|---|")
-        print(f"| full | {', '.join(full_cfg.effects)} | {1 / t_full:,.0f} |")
-        print(f"| minimal | {', '.join(minimal_cfg.effects) or 'none'} | {1 / t_min:,.0f} |")
+        print(f"| full | {', '.join(full_cfg.effects)} | {spread(1 / t_full)} |")
+        print(f"| minimal | {', '.join(minimal_cfg.effects) or 'none'} | {spread(1 / t_min)} |")
 
+        # Paired by seed: the effect's cost is the difference of two runs drawing the same presses.
         print("\n| effect added (in order) | ms per 1000 samples |\n|---|---|")
         listed = OmegaConf.to_container(full_cfg.effects)
         base = {k: v for k, v in listed.items() if k in minimal_cfg.effects}
         previous = seconds(load(full, n, base), args.repeats)
-        print(f"| (minimal: {', '.join(base) or 'none'}) | {1e6 * previous:.2f} |")
+        print(f"| (minimal: {', '.join(base) or 'none'}) | {spread(1e6 * previous, 2)} |")
         current = dict(base)
         for name, params in listed.items():
             if name in base:
                 continue
             current[name] = params
             now = seconds(load(full, n, current), args.repeats)
-            print(f"| + {name} | {1e6 * (now - previous):+.2f} |")
+            print(f"| + {name} | {spread(1e6 * (now - previous), 2)} |")
             previous = now
 
         print("\n| samples | seconds | samples/s |\n|---|---|---|")
@@ -99,8 +113,7 @@ def main(argv=None):
             cfg = load(full, size)
             per_sample = seconds(cfg, args.repeats)
             count = n_generated(instantiate(cfg).generate())
-            print(f"| {count} | {count * per_sample:.3f} | {1 / per_sample:,.0f} |")
-
+            print(f"| {count} | {spread(count * per_sample, 3)} | {spread(1 / per_sample)} |")
 
 if __name__ == "__main__":
     main()
