@@ -2,7 +2,7 @@
 holding, with margin: each test measures one observation of the seed paper on the scene the way
 the table does (runs/fidelity/rubber12.py), at the same scene seeds 0-2 with fewer repeats, and
 asserts it clear of the table's tolerance at every seed. Rows that do not hold are not asserted
-(the table records them and why)."""
+(the table records them and why), except the part of row 11 that holds (x and y)."""
 import json
 from dataclasses import asdict
 
@@ -69,6 +69,27 @@ def test_pressure_shows_over_many_channels(probe):
 
 def test_incremental_sensitivity_falls_at_high_force(probe):
     assert (by_seed(checks.saturation_at_high_force(probe), "ratio") < 0.8).all()   # table: 0.49, tolerance 1
+
+
+def test_table_ii_position_is_as_accurate_as_on_the_papers_sensor(probe):
+    """Row 11 does not hold: depth and pressure are easier here than on the paper's sensor
+    (docs/fidelity.md). Its x and y do, within ±0.10 of the paper's 0.947 and 0.976 at every seed."""
+    scores = np.array(checks.extra_trees_r2(probe).numbers["by_seed"])         # (seeds, x y z P)
+    assert (scores[:, 0] > 0.90).all() and (scores[:, 1] > 0.92).all(), scores   # table: 0.978 ± 0.012, 0.973 ± 0.012
+
+
+def test_table_ii_r2_does_not_depend_on_the_unit_of_pressure(probe):
+    """One forest fits all four targets; on raw targets pressure in pascals chose every split and x, y
+    moved with pressure's unit (seed 1: y 0.79 with Pa, 0.95 with kPa). Standardised, the unit only
+    changes rounding."""
+    from data.preprocessing.features import FEATURE_GROUPS, compute_features
+    one = probe.seeded[1]
+    table = one.lab_table
+    features = compute_features(table.channels, FEATURE_GROUPS)
+    targets = table.frame[table.target_columns].to_numpy()
+    in_pa = checks.hold_out_r2(features, targets, seed=1)
+    in_kpa = checks.hold_out_r2(features, targets * np.array([1.0, 1.0, 1.0, 1e-3]), seed=1)
+    assert np.abs(in_pa - in_kpa).max() < 0.04, (in_pa, in_kpa)
 
 
 def test_a_row_that_flips_on_one_seed_does_not_hold_and_says_so():

@@ -19,6 +19,7 @@ from functools import cached_property
 
 import numpy as np
 
+from common.standardise import mean_and_scale
 from data.preprocessing.features import FEATURE_GROUPS, compute_features
 from data.scenes.rubber12 import Rubber12Scene
 from data.scenes.rubber12_effects import FIELD_EFFECTS
@@ -342,25 +343,40 @@ def uncertainty_pattern(probe: SceneProbe) -> Measured:
 PAPER_TABLE_II = np.array([0.9466, 0.9762, 0.8516, 0.8670])   # extra trees' test R² x, y, z, P
 
 
-@observation("rubber12", "11", "Test R² of extra trees on a random 15 % hold-out; x notably less accurate "
-             "than y (Table II)", "x 0.947, y 0.976, z 0.852, P 0.867")
-def extra_trees_r2(probe: SceneProbe) -> Measured:
+def hold_out_r2(features: np.ndarray, targets: np.ndarray, seed: int) -> np.ndarray:
+    """Test R² per target of a 100-tree extra-trees forest on a random 15 % hold-out (the paper's
+    Table II protocol), the forest fitted to the targets standardised by the training rows' spread.
+
+    One forest fits all four targets, and its split criterion adds up their squared errors: on
+    raw targets a pressure in pascals (spread ~7e4) outweighs millimetres by ~1e8, every split
+    serves pressure, and x and y are learned only by accident. Their R² then depends on the unit
+    pressure is written in (x, y 0.883, 0.836 with Pa; 0.961, 0.953 with kPa; 0.976, 0.975 with
+    MPa; seeds 0-2 on the default scene, before this was changed), which no property of the
+    sensor does. Standardised targets weigh the four alike, whatever their units (row 10 does the
+    same)."""
     from sklearn.ensemble import ExtraTreesRegressor
     from sklearn.metrics import r2_score
 
+    test = np.random.default_rng(seed).permutation(len(targets))[: round(0.15 * len(targets))]
+    train = np.setdiff1d(np.arange(len(targets)), test)
+    mean, scale = mean_and_scale(targets[train])
+    forest = ExtraTreesRegressor(n_estimators=100, random_state=seed, n_jobs=1)
+    forest.fit(features[train], (targets[train] - mean) / scale)
+    return r2_score(targets[test], forest.predict(features[test]) * scale + mean, multioutput="raw_values")
+
+
+@observation("rubber12", "11", "Test R² of extra trees on a random 15 % hold-out; x notably less accurate "
+             "than y (Table II)", "x 0.947, y 0.976, z 0.852, P 0.867")
+def extra_trees_r2(probe: SceneProbe) -> Measured:
     def test_r2(one):
-        seed, table = one.params["seed"], one.lab_table
-        features = compute_features(table.channels, FEATURE_GROUPS)
-        targets = table.frame[table.target_columns].to_numpy()
-        test = np.random.default_rng(seed).permutation(len(targets))[: round(0.15 * len(targets))]
-        train = np.setdiff1d(np.arange(len(targets)), test)
-        forest = ExtraTreesRegressor(n_estimators=100, random_state=seed, n_jobs=1).fit(features[train], targets[train])
-        return r2_score(targets[test], forest.predict(features[test]), multioutput="raw_values")
+        table = one.lab_table
+        return hold_out_r2(compute_features(table.channels, FEATURE_GROUPS),
+                           table.frame[table.target_columns].to_numpy(), one.params["seed"])
     scores = _by_seed(probe, test_r2)                           # (seeds, targets)
     r2 = scores.mean(axis=0)
     return judged_over_seeds("R² " + ", ".join(f"{n} {mean_sd(v, 3)}" for n, v in zip(("x", "y", "z", "P"), scores.T)) +
-                             f" ({len(probe.lab_table.frame)} lab presses, 100 trees, physics features, a random hold-out "
-                             f"per seed, {_seeds(probe)})",
+                             f" ({len(probe.lab_table.frame)} lab presses, 100 trees on standardised targets, physics "
+                             f"features, a random hold-out per seed, {_seeds(probe)})",
                              (np.abs(scores - PAPER_TABLE_II) <= 0.1).all(axis=1),
                              bool(np.all(np.abs(r2 - PAPER_TABLE_II) <= 0.1)),
                              "every target within ±0.10 of the paper", probe.seeds,
