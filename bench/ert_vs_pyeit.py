@@ -33,7 +33,7 @@ trained on presses of 4 other simulated sensors at the run's noise), `greit_lear
 sensors' presses), `learned_mlp` (models/ert/learned_readings_inverse.py: a linear map to the
 patch loads and an MLP on the 5 x 5 patches around the most loaded one and the window's place,
 trained on 80 other simulated sensors x 1,000 presses at the run's noise; its noise weight chosen
-on calibration, then three nets at that weight averaged). The information floor these errors sit above:
+on calibration, then five nets at that weight averaged). The information floor these errors sit above:
 bench/ert_localisation_floor.py.
 
 Costs: set-up (pyEIT: mesh + Jacobian + H; Touchstone: the fit, which for GREIT includes
