@@ -268,3 +268,18 @@ def test_learned_mlp_trains_on_greits_simulated_presses_reduced_sensor_by_sensor
     voltages, expected = model._simulator().training_frames()          # all training sensors at once
     assert np.array_equal(targets, expected)
     assert np.allclose(readings, (transfer_basis(model.geometry).T @ voltages.T).T, rtol=1e-12, atol=0)
+
+
+def test_learned_mlp_members_are_a_prefix_so_validation_can_score_every_ensemble_size(learned_mlp_and_calibration):
+    """bench/ert_learned_validation.py scores the mean of the first k nets of one fit as the model
+    with n_members = k: member k's net must not depend on how many are trained."""
+    from models.ert.learned_readings_inverse import MeanOfNets
+    from runs.studies.ert_tests import fit_reconstruction
+
+    cfg, cal, model = learned_mlp_and_calibration
+    larger = fit_reconstruction("learned_mlp", cfg, 3, cal.channels, cal.targets, {**MLP, "n_members": 3})
+    assert larger.noise_weight_ == model.noise_weight_ and len(larger.module_.mlp.nets) == 3
+    three = larger.predict(cal.channels)
+    larger.module_.mlp = MeanOfNets(list(larger.module_.mlp.nets)[:MLP["n_members"]])
+    assert np.array_equal(larger.predict(cal.channels), model.predict(cal.channels))
+    assert not np.array_equal(three, model.predict(cal.channels))
