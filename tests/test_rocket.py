@@ -14,7 +14,8 @@ from common.errors import InputError
 from export.pipelines import export_pipeline
 from models.deployable import TimeSeriesPipeline, load_pipeline, save_pipeline
 from models.rocket.classifier import RocketClassifier
-from models.rocket.minirocket import MiniRocket, dilations_and_features, linear_quantiles, quantiles
+from models.rocket.minirocket import (SORT_FROM_COUNT, MiniRocket, dilations_and_features, linear_quantiles,
+                                      quantiles)
 from models.rocket.ridge_loo import ALPHAS, class_indicators, ridge_loo
 
 
@@ -99,6 +100,54 @@ def test_biases_own_outputs_and_inner_pooling_agree_with_the_whole_transform():
             np.testing.assert_allclose(own, rows, rtol=0, atol=1e-5 * np.abs(rows).max())
             padded_count = group._traced_features(torch.from_numpy(x))
             np.testing.assert_array_equal(group(torch.from_numpy(x)).numpy(), padded_count.numpy())
+
+
+def plain_counts(module: MiniRocket, x: np.ndarray) -> np.ndarray:
+    """Each feature's count of outputs above its bias, the plain way: the group's batched product
+    of all 84 kernels, each (dilation, kernel)'s output pooled over the whole or its inner part
+    (alternating from the first dilation), compared with each bias one at a time."""
+    counts = []
+    with torch.no_grad():
+        for group in module.groups:
+            outputs = group.convolutions(torch.from_numpy(x))                      # [n, D, 84, length]
+            for j, d in enumerate(group.dilations):
+                for k in range(84):
+                    values = outputs[:, j, k]
+                    if (group.first_index + j + k) % 2 == 1:
+                        values = values[:, 4 * d:x.shape[-1] - 4 * d]
+                    counts += [(values > b).sum(-1) for b in group.biases[j, k, :, 0]]
+    return torch.stack(counts, 1).numpy()
+
+
+@pytest.mark.parametrize("n_channels, length, n_windows", [(1, 80, 7), (3, 60, 23), (1, 1800, 3)])
+def test_the_eager_transform_counts_what_plain_comparisons_count(n_channels, length, n_windows):
+    """The eager transform (parts of a few windows, one dilation at a time; each output sorted
+    and searched where a kernel has SORT_FROM_COUNT biases or more, compared and summed where
+    fewer) counts exactly what comparing each output with each bias counts, ties included: a
+    constant window (inner outputs 0), a flat stretch and integer values
+    (outputs equal to biases), and a last part smaller than the others."""
+    rng = np.random.default_rng(length)
+    x = rng.standard_normal((n_windows, n_channels, length)).cumsum(-1).astype(np.float32)
+    x[0] = 1.5                                                                   # a constant window
+    x[1, :, length // 3:] = -0.25                                                # a flat stretch
+    x[2] = np.round(x[2])                                                        # integer steps: many ties
+    module = MiniRocket(n_channels, length, 10_000)
+    module.fit_biases(x, np.random.default_rng(1), 4)
+    counts = {g.count for g in module.groups}
+    assert min(counts) < SORT_FROM_COUNT <= max(counts) or length > 1_000   # both ways of counting are tested
+    with torch.no_grad():
+        features = module.transform(torch.from_numpy(x)).numpy()
+        pooled = np.concatenate([g.pool_scale.expand(len(g.dilations), 84, g.count).flatten() for g in module.groups])
+        for group in module.groups:   # the biases' own outputs are the batched product's rows, bit for bit
+            drawn = rng.integers(len(x), size=(len(group.dilations), 84))
+            own = group.own_outputs(torch.from_numpy(x[drawn])).numpy()
+            rows = group.convolutions(torch.from_numpy(x)).numpy()[drawn, np.arange(len(group.dilations))[:, None],
+                                                                    np.arange(84)]
+            np.testing.assert_array_equal(own, rows)
+    expected = plain_counts(module, x)
+    assert 0.1 < (expected * pooled).mean() < 0.9
+    np.testing.assert_array_equal(np.rint(features / pooled), expected)
+    np.testing.assert_array_equal(features, (expected * pooled).astype(np.float32))
 
 
 def test_long_windows_split_dilations_into_cache_sized_groups():

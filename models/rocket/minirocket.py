@@ -43,6 +43,7 @@ N_KERNELS = len(KERNEL_POSITIONS)
 # more spills the cache
 CONVOLUTION_ELEMENTS = 1 << 18
 COMPARISON_ELEMENTS = 1 << 18
+SORT_FROM_COUNT = 12
 MIN_LENGTH = KERNEL_LENGTH
 GOLDEN_RATIO = (math.sqrt(5) + 1) / 2
 KERNEL_WEIGHTS = 3 * torch.zeros(N_KERNELS, KERNEL_LENGTH).scatter_(1, KERNEL_POSITIONS, 1.0) - 1   # -1, +2 at a, b, c
@@ -123,10 +124,22 @@ class DilationGroup(nn.Module):
         """The 84 kernels' outputs at each of the group's dilations on each kernel's channel
         combination, zero-padded: [batch, dilations, 84, length]; one matrix product of the
         kernels' weights with the nine shifted copies per channel."""
-        padded = nn.functional.pad(x, (self.padding, self.padding)).flatten(1)    # [batch, channels x padded]
+        return torch.matmul(self.kernel_weights(), self.shifted_copies(x))
+
+    def shifted_copies(self, x: torch.Tensor, padded: torch.Tensor | None = None,
+                       out: torch.Tensor | None = None) -> torch.Tensor:
+        """The nine shifted copies per channel at each dilation [batch, D, channels x 9, length],
+        zero-padded; eager passes `padded` [batch, channels, padded length] (zero outside x) and
+        `out` [batch, D, channels x 9, length] to write into."""
+        if padded is None:
+            padded = nn.functional.pad(x, (self.padding, self.padding))
+        else:
+            padded[..., self.padding:self.padding + x.shape[-1]] = x           # the padding stays zero
         # index_select on the flat index: torch's advanced indexing took twice as long; both are one Gather in the graph
-        copies = padded.index_select(1, self.shift_index.flatten()).view(-1, *self.shift_index.shape)
-        return torch.matmul(self.kernel_weights(), copies)               # copies [batch, D, channels x 9, length]
+        index = self.shift_index.flatten()
+        if out is None:
+            return padded.flatten(1).index_select(1, index).view(-1, *self.shift_index.shape)
+        return torch.index_select(padded.flatten(1), 1, index, out=out.flatten(1)).view(out.shape)
 
     def own_outputs(self, x: torch.Tensor) -> torch.Tensor:
         """Each (dilation, kernel)'s output on its own window only, `x` [D, 84, channels, length]
@@ -135,23 +148,23 @@ class DilationGroup(nn.Module):
         so summing them in the order of the copies gives what the matrix product gives, bit for
         bit where it sums in that order (as MKL's does here: tested), and biases that equal an
         output value (flat stretches) equal it in the transform too."""
-        padded = nn.functional.pad(x, (self.padding, self.padding)).flatten(2)   # [D, 84, channels x padded]
-        index = self.shift_index.flatten(1)[:, None].expand(-1, N_KERNELS, -1)
-        copies = padded.gather(2, index).view(*index.shape[:2], *self.shift_index.shape[1:])  # [D, 84, C x 9, length]
-        weights = self.kernel_weights()[..., None]                                    # [D, 84, C x 9, 1]
-        outputs = weights[:, :, 0] * copies[:, :, 0]
-        for r in range(1, copies.shape[2]):
-            outputs = outputs + weights[:, :, r] * copies[:, :, r]
-        return outputs
+        padded = nn.functional.pad(x, (self.padding, self.padding))               # [D, 84, channels, padded]
+        weights, length, rows = self.kernel_weights(), x.shape[-1], []
+        for j, d in enumerate(self.dilations):
+            # copy r = (channel c, shift s) of `shift_index`, sliced from the padded input: gathering the copies of
+            # every (dilation, kernel) took most of fit_biases' time at 1,460 steps
+            outputs = None
+            for r in range(weights.shape[-1]):
+                c, start = r // KERNEL_LENGTH, self.padding + (r % KERNEL_LENGTH - KERNEL_LENGTH // 2) * d
+                term = weights[j, :, r, None] * padded[j, :, c, start:start + length]
+                outputs = term if outputs is None else outputs + term
+            rows.append(outputs)
+        return torch.stack(rows)
 
     def forward(self, x: torch.Tensor) -> torch.Tensor:
         if torch.jit.is_tracing():  # export/torch_graphs.to_onnx traces: one batch of any size
             return self._traced_features(x)
-        # eager (fit and predict run batches of many windows): as many windows at a time as keep one step's
-        # comparisons in cache; a group's outputs are read once, in order (OSULeaf's fit took 7 % less CPU time than
-        # with the outputs held in cache too, one window at a time: fewer steps of Python)
-        windows = max(1, COMPARISON_ELEMENTS // (N_KERNELS // 2 * self.count * x.shape[-1]))
-        return torch.cat([self._eager_features(part) for part in x.split(windows)])
+        return self._eager_features(x)
 
     def _traced_features(self, x: torch.Tensor) -> torch.Tensor:
         """PPV features [batch, D x 84 x count]: Greater, Cast, ReduceSum on as many dilations at
@@ -172,22 +185,68 @@ class DilationGroup(nn.Module):
         return (torch.cat(counts, 1) * self.pool_scale).flatten(1)
 
     def _eager_features(self, x: torch.Tensor) -> torch.Tensor:
-        """The same features in torch, at each dilation the 42 kernels pooled over the whole
-        output and the 42 pooled over the inner part in turn (the inner ones compared on that
-        part only: no -inf to add, and at the largest dilations most of the output is skipped),
-        each step's 0/1 written straight as float into one scratch tensor (torch's bool-to-float
-        cast or bool sum ran 3-5x slower)."""
-        outputs = self.convolutions(x)                                           # [batch, D, 84, length]
-        batch, length = len(x), x.shape[-1]
-        counts = torch.empty(batch, len(self.dilations), N_KERNELS, self.count)
-        scratch = torch.empty(batch * (N_KERNELS // 2) * self.count * length)
+        """The same features in torch (fit and predict run batches of many windows), as many
+        windows at a time as keep one PPV step's comparisons in cache, one dilation's outputs at a
+        time (one matrix product per dilation, compared while in cache), at each dilation the 42
+        kernels pooled over the whole output and the 42 pooled over the inner part in turn (the
+        inner ones compared on that part only: no -inf to add, and at the largest dilations most
+        of the output is skipped). Every tensor a part writes, and every view of them a step
+        reads, is made once per call (`_plan`), not per part: a tensor made fresh is fresh pages
+        (the matrix product into a fresh output took 1.4x as long), and each view is a step of
+        Python (ACSF1's transform spent a third of its time between torch's operations)."""
+        # a sorted step keeps no comparisons: as many windows as keep one dilation's outputs in cache
+        per_window = (N_KERNELS if self.count >= SORT_FROM_COUNT else N_KERNELS // 2 * self.count) * x.shape[-1]
+        windows = min(len(x), max(1, COMPARISON_ELEMENTS // per_window))
+        weights = self.kernel_weights()
+        work = (x.new_zeros(windows, self.n_channels, x.shape[-1] + 2 * self.padding),   # padded input
+                x.new_empty(windows, *self.shift_index.shape),                           # shifted copies
+                x.new_empty(windows, N_KERNELS, x.shape[-1]),                            # one dilation's outputs
+                x.new_empty(windows, len(self.dilations), N_KERNELS, self.count),        # counts
+                x.new_empty(windows * (N_KERNELS // 2) * self.count * x.shape[-1]))      # one step's comparisons
+        features, plans = x.new_empty(len(x), len(self.dilations), N_KERNELS, self.count), {}
+        for start in range(0, len(x), windows):
+            part = x[start:start + windows]
+            if len(part) not in plans:
+                plans[len(part)] = self._plan(weights, work, len(part))
+            padded, copies, counts, steps = plans[len(part)]
+            self.shifted_copies(part, padded, copies)
+            for weights_j, copies_j, outputs, halves in steps:
+                torch.matmul(weights_j, copies_j, out=outputs)                     # [batch, 84, length]
+                for rows, biases, aside, counted in halves:
+                    if self.count >= SORT_FROM_COUNT:                                 # aside: the pooled length
+                        ordered = torch.from_numpy(np.sort(rows.numpy(), -1))
+                        torch.sub(aside, torch.searchsorted(ordered, biases, right=True), out=counted)
+                    else:                                                             # aside: the comparisons
+                        torch.sum(torch.gt(rows, biases, out=aside), -1, out=counted)
+            features[start:start + len(part)] = counts
+        return (features * self.pool_scale).flatten(1)
+
+    def _plan(self, weights: torch.Tensor, work: tuple, batch: int):
+        """The views one part of `batch` windows reads and writes: (padded input, copies, counts,
+        per dilation (its weights, its copies, its outputs, per pooling half (outputs pooled,
+        biases, the comparisons' scratch or, where sorted, the pooled length, counts)))). A PPV
+        step compares each output with each of its kernel's biases and sums (0/1 written straight
+        as float: torch's bool-to-float cast or bool sum ran 3-5x slower), or, where a kernel has
+        SORT_FROM_COUNT biases or more, sorts each output once and counts the values above each
+        bias by a binary search (numpy's sort: torch's took 25x as long): a sort and torch's
+        batched search cost about as much as 8-10 comparisons per value (OSULeaf, ACSF1)."""
+        padded, copies, outputs, counts = (t[:batch] for t in work[:4])
+        scratch = work[4]
+        length = outputs.shape[-1]
+        steps = []
         for j, d in enumerate(self.dilations):
-            whole = (self.first_index + j) % 2
+            whole, halves = (self.first_index + j) % 2, []
             for first, crop in ((whole, 0), (1 - whole, 4 * d)):
-                rows = outputs[:, j, first::2, crop:length - crop].unsqueeze(2)       # [batch, 42, 1, pooled length]
-                above = scratch[:rows.numel() * self.count].view(batch, N_KERNELS // 2, self.count, -1)
-                torch.sum(torch.gt(rows, self.biases[j, first::2], out=above), -1, out=counts[:, j, first::2])
-        return (counts * self.pool_scale).flatten(1)
+                rows = outputs[:, first::2, crop:length - crop]                         # [batch, 42, pooled length]
+                biases = self.biases[j, first::2]                                        # [42, count, 1]
+                if self.count >= SORT_FROM_COUNT:
+                    halves.append((rows, biases[..., 0].expand(batch, -1, -1).contiguous(),
+                                   torch.tensor(float(rows.shape[-1])), counts[:, j, first::2]))
+                else:
+                    above = scratch[:rows.numel() * self.count].view(batch, N_KERNELS // 2, self.count, -1)
+                    halves.append((rows.unsqueeze(2), biases, above, counts[:, j, first::2]))
+            steps.append((weights[j], copies[:, j], outputs, halves))
+        return padded, copies, counts, steps
 
 
 class MiniRocket(nn.Module):
