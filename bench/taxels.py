@@ -8,8 +8,9 @@
 Pairs: many loads (random positions, normal and shear forces) against the 2 x 2 array's taxels,
 through the half-space strain (data/physics/elastic_half_space.py, Boussinesq + Cerruti, full
 tensor) and the bonded-layer base traction (data/physics/bonded_layer.py, kernels cached). Scene:
-`generate()` of each taxels variant on random loads, best of --repeats, after one warm-up call
-(the bonded-layer kernels are built once per process, ~1 s). --summarise reads a taxel_inverse
+`generate()` of each taxels variant on random loads, after one warm-up call (the bonded-layer
+kernels are built once per process, ~1 s). Both print mean ± sd over --repeats timings of process
+CPU time (one thread: OMP_NUM_THREADS=1), which a shared machine's load inflates less than wall time. --summarise reads a taxel_inverse
 sweep's job folders and prints mean ± sd over seeds of each target's validation and test R^2 and
 test RMSE by cover and thickness (the best per target chosen on validation).
 """
@@ -43,15 +44,19 @@ def pairs_per_second(n_pairs: int, repeats: int) -> dict:
     out = {}
     for name, fn in (("half_space_strain", lambda: point_load_strain(dx, dy, 580e-6, force, shear[0], shear[1], 2.4e6, 0.5)),
                      ("bonded_layer_traction", lambda: base_traction_pa(dx, dy, 580e-6, force, shear[0], shear[1], 0.5))):
-        best = min(_timed(fn) for _ in range(repeats))
-        out[name] = n_loads * 4 / best
+        out[name] = _mean_sd([n_loads * 4 / _timed(fn) for _ in range(repeats)])
     return out
 
 
 def _timed(fn) -> float:
-    start = time.perf_counter()
+    start = time.process_time()
     fn()
-    return time.perf_counter() - start
+    return time.process_time() - start
+
+
+def _mean_sd(rates: list) -> tuple:
+    """Mean and sample sd of the repeats' rates (sd 0 for one repeat)."""
+    return float(np.mean(rates)), float(np.std(rates, ddof=1)) if len(rates) > 1 else 0.0
 
 
 def scene_samples_per_second(n_samples: int, repeats: int, variants) -> dict:
@@ -63,8 +68,8 @@ def scene_samples_per_second(n_samples: int, repeats: int, variants) -> dict:
             cfg = compose("config", overrides=[f"scene={variant}", "seed=0", f"scene.n_samples={n_samples}",
                                                "scene.protocol=random_loads"])
             instantiate(cfg.scene).generate()  # warm-up: kernels, imports
-            best = min(_timed(lambda: instantiate(cfg.scene).generate()) for _ in range(repeats))
-            out[variant] = n_samples / best
+            out[variant] = _mean_sd([n_samples / _timed(lambda: instantiate(cfg.scene).generate())
+                                     for _ in range(repeats)])
     return out
 
 
@@ -129,12 +134,12 @@ def main(argv=None):
     if args.summarise is not None:
         print(summarise(args.summarise))
         return
-    print(f"strain evaluation, {args.pairs:,} load-taxel pairs, best of {args.repeats}:")
-    for name, rate in pairs_per_second(args.pairs, args.repeats).items():
-        print(f"  {name:24s} {rate:14,.0f} pairs/s")
-    print(f"scene generate(), random_loads, {args.samples:,} samples, best of {args.repeats}:")
-    for name, rate in scene_samples_per_second(args.samples, args.repeats, args.variants).items():
-        print(f"  {name:24s} {rate:14,.0f} samples/s")
+    print(f"strain evaluation, {args.pairs:,} load-taxel pairs, process CPU time, mean ± sd of {args.repeats}:")
+    for name, (rate, sd) in pairs_per_second(args.pairs, args.repeats).items():
+        print(f"  {name:24s} {rate:14,.0f} ± {sd:,.0f} pairs/s")
+    print(f"scene generate(), random_loads, {args.samples:,} samples, process CPU time, mean ± sd of {args.repeats}:")
+    for name, (rate, sd) in scene_samples_per_second(args.samples, args.repeats, args.variants).items():
+        print(f"  {name:24s} {rate:14,.0f} ± {sd:,.0f} samples/s")
 
 
 if __name__ == "__main__":
