@@ -102,4 +102,8 @@ def main(argv=None):
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    try:
+        sys.exit(main())
+    except InputError as problem:   # a bad option: one line, exit code 2, as train.py answers
+        print(f"error: {problem}", file=sys.stderr)
+        sys.exit(2)

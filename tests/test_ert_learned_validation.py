@@ -21,7 +21,8 @@ def run_validation(*args):
 
 def test_validation_refuses_the_benchs_test_sensors():
     done = run_validation("--seeds", "30000", "1")
-    assert done.returncode != 0 and "test sensors" in done.stderr
+    assert done.returncode == 2 and done.stderr.startswith("error:") and "test sensors" in done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1        # one line, no traceback
 
 
 @pytest.mark.slow
