@@ -70,6 +70,8 @@ from common.standardise import mean_and_scale
 from data.splits.indices import stratified_folds
 from models.distributed import TrainingGroup, rank_seed
 from models.epoch_callback import member_callback
+from models import fold_epoch_choice
+from models.fold_epoch_choice import best_epoch, each_folds_best_epoch, pooled_curve
 from models.nets.member_average import MemberAverage
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
@@ -77,12 +79,6 @@ log = logging.getLogger(__name__)
 OPTIMISERS = ("sgd", "adam")
 SCHEDULES = ("milestones", "plateau")
 EPOCH_SELECTIONS = ("validation", "folds", "train_loss")
-# epoch_selection=folds scores each epoch by the pooled held-out accuracy (and loss) averaged over
-# it and the epochs before it, this many in all: on ArrowHead's 36 recordings the single best epoch
-# was a spike (seed 0: epoch 67, pooled 0.83, its refit 0.73 on test) where windows of 5-21 epochs
-# chose 148-160 (refit 0.82-0.84); trailing, so a curve still rising when the budget ends chooses
-# its last epoch (docs/training_recipes.md).
-FOLD_CURVE_WINDOW = 11
 # What a checkpoint must agree on with the fit that resumes it (max_epochs may grow: a run can
 # be extended; device and progress do not change the result).
 RESUME_KEYS = ("optimizer", "lr", "momentum", "weight_decay", "lr_schedule", "milestones", "gamma", "lr_factor",
@@ -294,8 +290,9 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
 
     def _fit_on_folds(self, X, y, n_classes, epoch_callback, groups):
         """Epoch count = the epoch of the best pooled held-out accuracy (ties: lower pooled held-out
-        loss), each averaged over it and the epochs before it (FOLD_CURVE_WINDOW), of folds trained as the refit trains: the plateau on the training loss, the held-out
-        recordings only scored at every epoch, so fold and refit follow one schedule. A fold that
+        loss), each averaged over it and the epochs before it (models/fold_epoch_choice.py), of folds
+        trained as the refit trains: the plateau on the training loss, the held-out recordings only
+        scored at every epoch, so fold and refit follow one schedule. A fold that
         stopped early (its training loss no longer falls by early_stopping_min_delta) keeps its last
         held-out predictions for the later epochs."""
         groups = np.arange(len(X)) if groups is None else np.asarray(groups)
@@ -308,45 +305,20 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             fold._train(X[fit_rows], y[fit_rows], X[held_rows], y[held_rows], n_classes,
                         member_callback(epoch_callback, f"fold{k}"), int(self.max_epochs))
             curves.append(np.stack(fold.held_out_proba_))          # (epochs run, held-out windows, classes)
-        n_epochs = max(len(curve) for curve in curves)
-        # Every epoch's held-out probabilities (float32): epochs x windows x classes, 1500 x 3,000 x 10
-        # would be 180 MB; a set of many windows per recording should lower trainer.max_epochs.
-        proba = np.zeros((n_epochs, len(X), n_classes), dtype=np.float32)
-        for (_, held_rows), curve in zip(folds, curves):
-            proba[:, held_rows] = np.concatenate([curve, np.repeat(curve[-1:], n_epochs - len(curve), axis=0)])
-        accuracy, loss = (self._trailing_mean(score, FOLD_CURVE_WINDOW) for score in self._held_out_scores(proba, y))
-        best = max(range(n_epochs), key=lambda e: (accuracy[e], -loss[e]))
+        proba = pooled_curve(folds, curves, len(X), n_classes)
+        best, accuracy, loss = best_epoch(proba, y)
         epochs = best + 1
         self.out_of_fold_proba_ = proba[best].astype(np.float64)
         self.fold_epochs_run_ = [len(curve) for curve in curves]
-        self.fold_best_epochs_ = []   # each fold alone (its own best held-out epoch), to show their spread
-        for (_, held_rows), curve in zip(folds, curves):
-            fold_accuracy, fold_loss = self._held_out_scores(curve, y[held_rows])
-            self.fold_best_epochs_.append(max(range(len(curve)), key=lambda e: (fold_accuracy[e], -fold_loss[e])) + 1)
+        self.fold_best_epochs_ = each_folds_best_epoch(folds, curves, y)
         self.fold_curve_ = {"accuracy": accuracy.tolist(), "loss": loss.tolist()}
         self.out_of_fold_method_ = f"{len(folds)} stratified folds"   # the epoch: best_epoch_
         log.info("epochs chosen on %d stratified folds' pooled held-out curve: epoch %d (held-out accuracy %.3f, "
-                 "loss %.4f, each the mean of 11 epochs to it; of %d run); refitting on all %d windows", len(folds), epochs, accuracy[best], loss[best],
-                 n_epochs, len(X))
+                 "loss %.4f, each the mean of %d epochs to it; of %d run); refitting on all %d windows", len(folds), epochs,
+                 accuracy[best], loss[best], fold_epoch_choice.FOLD_CURVE_WINDOW, len(proba), len(X))
         self._train(X, y, None, None, n_classes, epoch_callback, epochs)
         self.best_epoch_ = epochs
         return self
-
-    @staticmethod
-    def _trailing_mean(values, window: int) -> np.ndarray:
-        """Each value replaced by the mean of it and the values before it, `window` in all (fewer at the start)."""
-        sums = np.concatenate([[0.0], np.cumsum(values)])
-        index = np.arange(len(values))
-        low = np.maximum(index + 1 - window, 0)
-        return (sums[index + 1] - sums[low]) / (index + 1 - low)
-
-    @staticmethod
-    def _held_out_scores(curve, y):
-        """Accuracy and mean cross-entropy at every epoch of held-out probabilities `curve`
-        (epochs, windows, classes) against labels `y`."""
-        accuracy = (curve.argmax(axis=2) == y).mean(axis=1)
-        loss = -np.log(np.clip(curve[:, np.arange(len(y)), y], 1e-12, None)).mean(axis=1)
-        return accuracy, loss
 
     def _fit_ensemble(self, X, y, X_val, y_val, n_classes, epoch_callback, groups):
         """Members with seeds seed, seed+1, ...: one module averaging their probabilities."""

@@ -13,7 +13,7 @@ from data.splits.indices import predefined_split, stratified_folds
 from export.run_export import write_onnx
 from models.deployable import TimeSeriesPipeline
 from models.nets.inceptiontime import InceptionTime
-from models import timeseries_classifier
+from models import fold_epoch_choice
 from models.timeseries_classifier import TimeSeriesClassifier
 from runs.run import run
 
@@ -65,7 +65,7 @@ def test_carving_validation_keeps_a_training_recording_of_every_class():
 
 
 def test_the_folds_choose_the_epoch_of_the_best_pooled_held_out_accuracy(monkeypatch):
-    monkeypatch.setattr(timeseries_classifier, "FOLD_CURVE_WINDOW", 3)   # a window that fits in 6 epochs
+    monkeypatch.setattr(fold_epoch_choice, "FOLD_CURVE_WINDOW", 3)   # a window that fits in 6 epochs
     X, y = tones()
     model = classifier(epoch_selection="folds", n_folds=2, max_epochs=6).fit(X, y)
     # By hand: each fold's network after e epochs, trained as the refit trains (the plateau on the
