@@ -85,6 +85,8 @@ def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool, 
     import json
 
     import numpy as np
+
+    from models.fold_epoch_choice import FOLD_CURVE_WINDOW
     data = np.load(path, allow_pickle=False)   # a user's file: never unpickled
     classes, y_all = np.unique(data["y"], return_inverse=True)
     train, test = data["split"] == "train", data["split"] == "test"
@@ -119,7 +121,7 @@ def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool, 
                 # An ensemble (model.ensemble_size > 1): its members' choices, one list each.
                 ensemble = isinstance(chosen.best_epoch_, list)
                 pooled = "" if ensemble else \
-                    f" (pooled held-out accuracy over 11 epochs {chosen.fold_curve_['accuracy'][chosen.best_epoch_ - 1]:.3f})"
+                    f" (pooled held-out accuracy over {FOLD_CURVE_WINDOW} epochs {chosen.fold_curve_['accuracy'][chosen.best_epoch_ - 1]:.3f})"
                 print(f"{model} seed {seed}, trainer=reference: folds ran {chosen.fold_epochs_run_} epochs, chose "
                       f"{chosen.best_epoch_}{pooled}; each fold alone {chosen.fold_best_epochs_}; refit test accuracy "
                       f"{accuracy:.3f}, fit {fit_s:.0f} s wall, {fit_cpu_s:.0f} s CPU, at load "
