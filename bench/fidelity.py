@@ -25,8 +25,6 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
-from sklearn.ensemble import ExtraTreesRegressor  # noqa: E402
-from sklearn.metrics import r2_score  # noqa: E402
 
 from common.threads import apply_threads, configured_threads  # noqa: E402
 from runs.fidelity.observations import (  # noqa: E402
@@ -37,6 +35,7 @@ from runs.fidelity.rubber12 import (  # noqa: E402
     centre_widest_range,
     corners_least_sensitive,
     extra_trees_r2,
+    hold_out_r2,
     mirror_ambiguity_worst_at_edges,
 )
 from runs.fidelity.fingertip import algorithm1_diagnostic, diagnostic_markdown  # noqa: E402
@@ -75,17 +74,13 @@ RANDOM_PRESSES = 1500
 
 
 def _random_press_r2(params, pattern) -> str:
-    """Extra trees (100, physics features) on uniformly drawn presses, random 15 % hold-out, at each
-    seed: how well a pattern localises away from the lab's nine points."""
+    """Row 11's forest and hold-out on uniformly drawn presses, at each seed: how well a pattern
+    localises away from the lab's nine points (x, y, depth)."""
     scores = []
     for seed in SEEDS:
         probe = SceneProbe({**params, "measurement": pattern, "seed": seed})
         table = probe.scene(n_samples=RANDOM_PRESSES, protocol="random").generate()
-        features, targets = compute_features(table.channels, FEATURE_GROUPS), table.targets
-        test = np.random.default_rng(seed).permutation(len(targets))[: int(0.15 * len(targets))]
-        train = np.setdiff1d(np.arange(len(targets)), test)
-        forest = ExtraTreesRegressor(n_estimators=100, random_state=seed, n_jobs=1).fit(features[train], targets[train])
-        scores.append(r2_score(targets[test], forest.predict(features[test]), multioutput="raw_values")[:3])
+        scores.append(hold_out_r2(compute_features(table.channels, FEATURE_GROUPS), table.targets, seed)[:3])
     return " / ".join(mean_sd(column, 3) for column in np.array(scores).T)
 
 

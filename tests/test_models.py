@@ -88,3 +88,22 @@ def test_random_forest_per_output_is_one_forest_per_target():
 def test_unknown_tree_kind_is_a_clear_error():
     with pytest.raises(InputError, match="model.kind must be one of"):
         TreeRegressor(kind="gradient_boosting").fit(*toy())
+
+
+@pytest.mark.parametrize("kind", ["extra_trees", "random_forest", "decision_tree"])
+def test_one_forest_for_several_targets_does_not_depend_on_their_units(kind):
+    # One forest adds its targets' squared errors in every split: on raw targets a target in large
+    # units (pressure in pascals) would choose every split. Grown on targets divided by their spread,
+    # the forest predicts the same x whatever unit the second target is in, and in units.
+    X, y = toy(n=300)
+    y = np.column_stack([y[:, 0], np.sin(3 * X[:, 3]) + X[:, 4] ** 2])
+    params = dict(kind=kind, n_estimators=10, max_features=None, max_depth=None, seed=3)
+    in_units = TreeRegressor(**params).fit(X, y).predict(X[:40])
+    large = 2.0 ** 17   # a power of two: the standardised targets are then the same to the bit
+    scaled = y * np.array([1.0, large])
+    in_large_units = TreeRegressor(**params).fit(X, scaled).predict(X[:40])
+    np.testing.assert_allclose(in_large_units[:, 0], in_units[:, 0], rtol=1e-9)
+    np.testing.assert_allclose(in_large_units[:, 1], large * in_units[:, 1], rtol=1e-9)
+    # fully grown trees reproduce their training targets in units
+    fitted = TreeRegressor(kind="decision_tree", max_features=None, max_depth=None).fit(X, scaled)
+    np.testing.assert_allclose(fitted.predict(X), scaled, rtol=1e-6)
