@@ -20,6 +20,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from common.spread import format_mean_sd  # noqa: E402
 from models.distributed import fit_in_processes  # noqa: E402
 from models.nets.lstm_fcn import LSTMFCN  # noqa: E402
 from models.nets.prcnn import PRCNN  # noqa: E402
@@ -57,7 +58,7 @@ def cases(epochs: int, dropout: bool):
 
 
 def mean_sd(values) -> str:
-    return f"{np.mean(values):.1f} ± {np.std(values, ddof=1) if len(values) > 1 else 0.0:.1f}"
+    return format_mean_sd(values, ".1f")
 
 
 def main():

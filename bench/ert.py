@@ -34,6 +34,7 @@ from omegaconf import OmegaConf
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.spread import format_mean_sd
 from data.scenes import ert
 from export.reconstruction_graphs import linear_image_to_onnx, tikhonov_to_onnx
 from models.ert.gauss_newton import GaussNewtonReconstruction
@@ -53,9 +54,7 @@ def scene(name: str, **overrides):
 
 
 def mean_sd(values) -> str:
-    digits = 2 if np.mean(values) < 10 else 0
-    sd = np.std(values, ddof=1) if len(values) > 1 else 0.0
-    return f"{np.mean(values):.{digits}f} +- {sd:.{digits}f}"
+    return format_mean_sd(values, ".2f" if np.mean(values) < 10 else ".0f", " +- ")
 
 
 def main(argv=None):

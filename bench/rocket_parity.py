@@ -32,6 +32,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.spread import format_mean_sd  # noqa: E402
 from common.threads import apply_threads  # noqa: E402
 
 AEON_VENV = ROOT / "bench" / ".venv-aeon"
@@ -131,8 +132,7 @@ def touchstone_rows(data, member, seeds, clock=time.perf_counter) -> list[dict]:
 
 
 def spread(rows, key, digits=3) -> str:
-    values = np.array([r[key] for r in rows], dtype=float)
-    return f"{values.mean():.{digits}f} ± {values.std(ddof=1) if len(values) > 1 else 0.0:.{digits}f}"
+    return format_mean_sd([r[key] for r in rows], f".{digits}f")
 
 
 def main():

@@ -26,6 +26,8 @@ from omegaconf import OmegaConf
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.spread import format_mean_sd  # noqa: E402
+
 # full scene -> (minimal scene, the key that sets its size, samples per unit of that key).
 # A rubber12 sample is one press; a fingertip sample is one recording (one pass, two channels
 # of ~2,100 steps), and its size key counts passes per force level over 18 boards x 6 levels;
@@ -71,7 +73,7 @@ def seconds(cfg, repeats: int) -> np.ndarray:
 
 def spread(values: np.ndarray, digits: int = 0) -> str:
     """'mean +- sd' of `values` with `digits` decimals and thousands separators."""
-    return f"{values.mean():,.{digits}f} ± {values.std(ddof=1) if len(values) > 1 else 0.0:,.{digits}f}"
+    return format_mean_sd(values, f",.{digits}f")
 
 
 def main(argv=None):

@@ -25,6 +25,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.spread import mean_and_sd  # noqa: E402
 from data.physics.bonded_layer import base_traction_pa, layer_kernels  # noqa: E402
 from data.physics.elastic_half_space import point_load_strain  # noqa: E402
 from common.run_status import run_status  # noqa: E402
@@ -44,7 +45,7 @@ def pairs_per_second(n_pairs: int, repeats: int) -> dict:
     out = {}
     for name, fn in (("half_space_strain", lambda: point_load_strain(dx, dy, 580e-6, force, shear[0], shear[1], 2.4e6, 0.5)),
                      ("bonded_layer_traction", lambda: base_traction_pa(dx, dy, 580e-6, force, shear[0], shear[1], 0.5))):
-        out[name] = _mean_sd([n_loads * 4 / _timed(fn) for _ in range(repeats)])
+        out[name] = mean_and_sd([n_loads * 4 / _timed(fn) for _ in range(repeats)])
     return out
 
 
@@ -52,11 +53,6 @@ def _timed(fn) -> float:
     start = time.process_time()
     fn()
     return time.process_time() - start
-
-
-def _mean_sd(rates: list) -> tuple:
-    """Mean and sample sd of the repeats' rates (sd 0 for one repeat)."""
-    return float(np.mean(rates)), float(np.std(rates, ddof=1)) if len(rates) > 1 else 0.0
 
 
 def scene_samples_per_second(n_samples: int, repeats: int, variants) -> dict:
@@ -68,7 +64,7 @@ def scene_samples_per_second(n_samples: int, repeats: int, variants) -> dict:
             cfg = compose("config", overrides=[f"scene={variant}", "seed=0", f"scene.n_samples={n_samples}",
                                                "scene.protocol=random_loads"])
             instantiate(cfg.scene).generate()  # warm-up: kernels, imports
-            out[variant] = _mean_sd([n_samples / _timed(lambda: instantiate(cfg.scene).generate())
+            out[variant] = mean_and_sd([n_samples / _timed(lambda: instantiate(cfg.scene).generate())
                                      for _ in range(repeats)])
     return out
 

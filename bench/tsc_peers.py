@@ -49,6 +49,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.spread import format_mean_sd  # noqa: E402
 from runs.report.pareto import pareto_mask  # noqa: E402
 
 PEER_VENV = ROOT / "bench" / ".venv-aeon"
@@ -189,7 +190,7 @@ def mean_sd(values, fmt: str) -> str:
         return "—"
     if len(values) == 1:
         return f"{values[0]:{fmt}} (1 seed)"
-    return f"{np.mean(values):{fmt}} ± {np.std(values, ddof=1):{fmt}}"
+    return format_mean_sd(values, fmt)
 
 
 def summary(rows: list[dict]) -> dict:

@@ -13,9 +13,10 @@ import importlib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-import numpy as np
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
+
+from common.spread import format_mean_sd
 
 ROOT = Path(__file__).resolve().parents[2]
 # seed 000, 003, 001, 002, 004 (../shared/notes/seed-observations.md)
@@ -99,8 +100,7 @@ def run_checks(scene: str, probe) -> list[Row]:
 
 
 def mean_sd(values, digits=2) -> str:
-    values = np.asarray(values, dtype=float)
-    return f"{values.mean():.{digits}f} ± {values.std(ddof=1) if values.size > 1 else 0.0:.{digits}f}"
+    return format_mean_sd(values, f".{digits}f")
 
 
 def seeds_label(seeds) -> str:

@@ -12,6 +12,7 @@ from pathlib import Path
 import numpy as np
 
 from common.atomic import atomic_write_json
+from common.spread import mean_and_sd
 
 log = logging.getLogger("touchstone")
 METRICS_FILE = "metrics.json"
@@ -34,9 +35,8 @@ def json_safe(value):
 
 def mean_sd(values) -> dict:
     """{"mean", "sd", "n"} of repeated measurements (sd with ddof 1; 0 for one value)."""
-    values = np.asarray(values, dtype=float)
-    return {"mean": float(values.mean()), "sd": float(values.std(ddof=1)) if len(values) > 1 else 0.0,
-            "n": int(len(values))}
+    mean, sd = mean_and_sd(values)
+    return {"mean": mean, "sd": sd, "n": int(np.size(values))}
 
 
 def numbers(metrics: dict, prefix: str = ""):
