@@ -65,7 +65,9 @@ class TreeRegressor(RegressorMixin, BaseEstimator):
         # finish, so the same run would differ in the last bit (the eager prediction of a big
         # forest gets slower; the exported ONNX model does not). Fitting stays parallel (each
         # tree is seeded).
-        self.estimator_.set_params(**{key: 1 for key in self.estimator_.get_params() if key.endswith("n_jobs")})
+        # MultiOutputRegressor's fitted forests are clones made before this line, so each is set.
+        for model in (self.estimator_, *self._forests()):
+            model.set_params(**{key: 1 for key in model.get_params() if key.endswith("n_jobs")})
         return self
 
     def _fit_in_units(self, X, y):
@@ -85,17 +87,19 @@ class TreeRegressor(RegressorMixin, BaseEstimator):
         check_is_fitted(self, "estimator_")
         return self.estimator_.predict(validate_data(self, X, reset=False, dtype=np.float32))
 
+    def _forests(self) -> list:
+        """The fitted forests (or tree): one per target with per_output, else the one."""
+        return self.estimator_.estimators_ if isinstance(self.estimator_, MultiOutputRegressor) else [self.estimator_]
+
     def feature_importances(self):
         """Impurity importances, averaged over the per-output forests when there are several."""
-        fitted = self.estimator_.estimators_ if isinstance(self.estimator_, MultiOutputRegressor) else [self.estimator_]
-        return np.mean([m.feature_importances_ for m in fitted], axis=0)
+        return np.mean([m.feature_importances_ for m in self._forests()], axis=0)
 
     @property
     def n_nodes_(self) -> int:
         """Total decision nodes over every tree, the trees' analogue of a parameter count."""
-        fitted = self.estimator_.estimators_ if isinstance(self.estimator_, MultiOutputRegressor) else [self.estimator_]
         total = 0
-        for model in fitted:
+        for model in self._forests():
             trees = getattr(model, "estimators_", [model])
             total += sum(t.tree_.node_count for t in trees)
         return total

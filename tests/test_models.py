@@ -80,9 +80,11 @@ def test_resmlp_survives_a_last_batch_of_one_and_reports_divergence():
 
 def test_random_forest_per_output_is_one_forest_per_target():
     X, y = toy()
-    model = TreeRegressor(kind="random_forest", n_estimators=5, per_output=True).fit(X, y)
+    model = TreeRegressor(kind="random_forest", n_estimators=5, per_output=True, n_jobs=-1).fit(X, y)
     assert len(model.estimator_.estimators_) == 2
     assert model.n_nodes_ > 0
+    # every fitted forest predicts on one thread (threads would add the trees in finishing order)
+    assert [forest.n_jobs for forest in model.estimator_.estimators_] == [1, 1]
 
 
 def test_unknown_tree_kind_is_a_clear_error():
