@@ -50,14 +50,13 @@ training trajectory is unchanged (training batches normalise with their own stat
 
 Resumable: with `checkpoint_path` the whole training state (weights, optimiser, schedule, RNG
 states, best epoch, last improvement that mattered, history) is written after every epoch, and
-`resume_from` continues from such a file to the same result as an uninterrupted fit (CPU).
+`resume_from` continues from such a file to the same result as an uninterrupted fit (CPU); the
+file's format and checks are models/training_checkpoint.py.
 """
 import copy
 import logging
 import math
-import os
 import time
-from pathlib import Path
 
 import numpy as np
 import torch
@@ -74,18 +73,12 @@ from models import fold_epoch_choice
 from models.fold_epoch_choice import best_epoch, each_folds_best_epoch, pooled_curve
 from models.nets.member_average import MemberAverage
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
+from models.training_checkpoint import RESUME_KEYS, load_checkpoint, save_checkpoint
 
 log = logging.getLogger(__name__)
 OPTIMISERS = ("sgd", "adam")
 SCHEDULES = ("milestones", "plateau")
 EPOCH_SELECTIONS = ("validation", "folds", "train_loss")
-# What a checkpoint must agree on with the fit that resumes it (max_epochs may grow: a run can
-# be extended; device and progress do not change the result).
-RESUME_KEYS = ("optimizer", "lr", "momentum", "weight_decay", "lr_schedule", "milestones", "gamma", "lr_factor",
-               "lr_plateau_patience", "min_lr", "early_stopping_patience", "early_stopping_min_patience",
-               "early_stopping_min_delta", "batch_size", "max_batch_fraction", "recalibrate_batchnorm", "seed")
-CHECKPOINT_KEYS = ("fingerprint", "epoch", "stopped", "elapsed_s", "module", "optimiser", "schedule", "best",
-                   "best_state", "improved", "history", "generator", "torch_rng", "cuda_rng")
 
 
 class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
@@ -207,37 +200,6 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         return {"module": type(self.module_).__name__, "shape": list(shape), "n_classes": len(self.classes_),
                 "n_parameters": count_parameters(self.module_),
                 **{k: (list(v) if isinstance(v, tuple) else v) for k, v in self.get_params().items() if k in RESUME_KEYS}}
-
-    def _save_checkpoint(self, state: dict):
-        """Written to a temporary file and renamed, so a run killed while saving keeps the
-        previous epoch's checkpoint. Holds tensors and plain values only (numbers, strings,
-        lists, tuples, dicts), so that resuming reads it with torch.load(weights_only=True)."""
-        path = Path(self.checkpoint_path)
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_name(path.name + ".tmp")
-        torch.save(state, tmp)
-        os.replace(tmp, path)
-
-    def _load_checkpoint(self, fingerprint: dict) -> dict:
-        path = Path(self.resume_from)
-        if path.is_dir():
-            path = path / "checkpoint" / "last.pt" if (path / "checkpoint").is_dir() else path / "last.pt"
-        if not path.is_file():
-            raise InputError(f"trainer.resume_from: no checkpoint at {path}")
-        try:  # weights_only: tensors and plain values only; a pickle that would run code is refused unread
-            state = torch.load(path, map_location="cpu", weights_only=True)
-        except Exception as error:
-            raise InputError(f"trainer.resume_from: {path} is not a readable checkpoint (torch.load with "
-                             f"weights_only=True refused it: {type(error).__name__})") from None
-        missing = sorted(set(CHECKPOINT_KEYS) - set(state)) if isinstance(state, dict) else ["everything"]
-        if missing:
-            raise InputError(f"trainer.resume_from: {path} is not a Touchstone checkpoint (no {missing[0]!r})")
-        saved = {"world_size": 1, **state["fingerprint"]}  # a checkpoint without the key: one process wrote it
-        differs = sorted(k for k in fingerprint if saved.get(k) != fingerprint[k])
-        if differs:
-            raise InputError(f"trainer.resume_from: the checkpoint {path} was written by another configuration "
-                             f"({differs[0]}: {saved.get(differs[0])!r} there, {fingerprint[differs[0]]!r} now)")
-        return state
 
     @staticmethod
     def _better(score, best) -> bool:
@@ -369,7 +331,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         fingerprint = {**self._fingerprint(X.shape[1:]), "world_size": group.size}  # dropout draws per rank
         self.history_, best, best_state, improved, first_epoch, elapsed_before = [], None, None, None, 0, 0.0
         if self.resume_from is not None:
-            state = self._load_checkpoint(fingerprint)
+            state = load_checkpoint(self.resume_from, fingerprint)
             self.module_.load_state_dict(state["module"])
             optimiser.load_state_dict(state["optimiser"])
             schedule.load_state_dict(state["schedule"])
@@ -450,7 +412,7 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             if self.checkpoint_path is not None:
                 rank_rngs = group.gather(torch.get_rng_state())
             if self.checkpoint_path is not None and group.is_writer:
-                self._save_checkpoint({
+                save_checkpoint(self.checkpoint_path, {
                     "fingerprint": fingerprint, "epoch": epoch + 1, "stopped": stopped,
                     "elapsed_s": record["elapsed_s"], "module": self.module_.state_dict(),
                     "optimiser": optimiser.state_dict(), "schedule": schedule.state_dict(), "best": best,

@@ -8,7 +8,8 @@ import torch
 
 from common.errors import InputError
 from models.nets.lstm_fcn import LSTMFCN
-from models.timeseries_classifier import CHECKPOINT_KEYS, TimeSeriesClassifier
+from models.timeseries_classifier import TimeSeriesClassifier
+from models.training_checkpoint import CHECKPOINT_KEYS
 from runs.reference_tasks import generate, split
 
 # LSTM-FCN for its dropout: the resumed run must continue the global RNG stream, not restart it
