@@ -65,7 +65,7 @@ def scene_samples_per_second(n_samples: int, repeats: int, variants) -> dict:
                                                "scene.protocol=random_loads"])
             instantiate(cfg.scene).generate()  # warm-up: kernels, imports
             out[variant] = mean_and_sd([n_samples / _timed(lambda: instantiate(cfg.scene).generate())
-                                     for _ in range(repeats)])
+                                        for _ in range(repeats)])
     return out
 
 
