@@ -11,9 +11,11 @@ candidates, so the comparison isolates the weighting. Prints validation and test
 as mean ± sd over seeds, and which candidate scores best on validation per target at each seed
 (the rubber12 paper's §IV-E: extra trees, weights 0, 0, 1). Weights are chosen on validation;
 test is for reporting only. The split is the datamodule's (grouped by default: all repeats of a
-position-depth pair on one side, so no press is in both training and validation).
+position-depth pair on one side, so no press is in both training and validation). Appended to
+results/blend_weights.jsonl as `r2` and `weights`, `r2/<the overrides>` etc. under other overrides.
 """
 import argparse
+import re
 import sys
 import time
 from pathlib import Path
@@ -26,10 +28,16 @@ from sklearn.metrics import r2_score
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from common.threads import apply_threads, resolve_threads  # noqa: E402
 from runs.run import seed_everything  # noqa: E402
 
 DEFAULT = ["model=blend", "scene.protocol=random", "scene.n_samples=2000"]
+BLENDS = ["blend, weights=paper", "blend, weights=stacking"]   # the rows beside the candidates alone
+# What the comparison measures: the two weighting rules, the three candidates and their configs,
+# and the scene, features and split they are fitted on.
+MEASURED_CODE = ["models/weighted_blend.py", "models/kfold_blend.py", "models/trees.py", "models/resmlp_regressor.py",
+                 "models/nets/resmlp.py", "configs/model/", "configs/trainer/", "configs/scene/", "data/"]
 
 
 def scores(y, predicted) -> np.ndarray:
@@ -51,29 +59,23 @@ def one_seed(seed: int, overrides: list[str]) -> dict:
     seconds = time.perf_counter() - start
     stacking = paper.reweighted("stacking")  # the same fitted candidates, the other rule
     rows = {name: model for name, model in paper.models_.items()}
-    rows["blend, weights=paper"], rows["blend, weights=stacking"] = paper, stacking
+    rows[BLENDS[0]], rows[BLENDS[1]] = paper, stacking
     result = {name: {"val": scores(y_val, m.predict(X_val).reshape(y_val.shape)),
                      "test": scores(y_test, m.predict(X_test).reshape(y_test.shape))} for name, m in rows.items()}
     result["weights"] = {"paper": paper.weights_, "stacking": stacking.weights_,
                          "stacking_fallback": stacking.stacking_fallback_targets_}
+    result["fit_s"] = seconds
     print(f"seed {seed}: fitted in {seconds:.0f} s; stacking weights (candidates x targets)\n"
           f"{np.round(stacking.weights_, 3)}; fallback targets {stacking.stacking_fallback_targets_}",
           file=sys.stderr)
-    return result, datamodule.target_names, list(paper.models_)
+    settings = {"protocol": cfg.scene.get("protocol"), "n_samples": cfg.scene.get("n_samples"),
+                "split": datamodule.split, "n_folds": cfg.data.n_folds}
+    return result, datamodule.target_names, list(paper.models_), settings
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--seeds", type=int, nargs="*", default=[0, 1, 2])
-    parser.add_argument("overrides", nargs="*")
-    args = parser.parse_args(argv)
-    overrides = args.overrides or DEFAULT
-    results = []
-    for seed in args.seeds:
-        result, targets, candidates = one_seed(seed, overrides)
-        results.append(result)
-    names = candidates + ["blend, weights=paper", "blend, weights=stacking"]
-    print(f"\n{' '.join(overrides)}; seeds {args.seeds}; R² mean ± sd over seeds\n")
+def print_table(seeds, overrides, results, targets, candidates):
+    names = candidates + BLENDS
+    print(f"\n{' '.join(overrides)}; seeds {seeds}; R² mean ± sd over seeds\n")
     print("| model | split | " + " | ".join(targets) + " |")
     print("|---|---|" + "---|" * len(targets))
     for split in ("val", "test"):
@@ -83,13 +85,49 @@ def main(argv=None):
             print(f"| {name} | {'validation' if split == 'val' else 'test'} | " + " | ".join(cells) + " |")
     validation = np.array([[r[name]["val"] for name in candidates] for r in results])   # seeds x candidates x targets
     winners = validation.argmax(axis=1)
-    print("\nbest candidate on validation per target, seed by seed (" + ", ".join(map(str, args.seeds)) + ")")
+    print("\nbest candidate on validation per target, seed by seed (" + ", ".join(map(str, seeds)) + ")")
     for k, target in enumerate(targets):
         print(f"{target}: " + ", ".join(candidates[w] for w in winners[:, k]))
     paper = np.array([r["weights"]["paper"] for r in results]).mean(axis=0)
     stacking = np.array([r["weights"]["stacking"] for r in results]).mean(axis=0)
     print("\nmean weights over seeds (rows: " + ", ".join(candidates) + "; columns: " + ", ".join(targets) + ")")
     print("paper:\n" + str(np.round(paper, 3)) + "\nstacking:\n" + str(np.round(stacking, 3)))
+
+
+def variant(overrides: list[str]) -> str:
+    """The records' name suffix: none for the default overrides, else the overrides (sorted) in
+    snake_case, so that the paper's 450 lab presses (docs/fidelity.md, row 12) keep their own records."""
+    if sorted(overrides) == sorted(DEFAULT):
+        return ""
+    return "/" + re.sub(r"[^a-z0-9]+", "_", " ".join(sorted(overrides)).lower()).strip("_")
+
+
+def record_seeds(record, seeds, overrides, results, targets, candidates, settings):
+    """The R² table (per model and split: seeds x targets, with each seed's fit seconds) and the
+    weights of both rules per seed (seeds x candidates x targets)."""
+    common = {"overrides": overrides, **settings, "targets": targets, "candidates": candidates}
+    rows = [{"model": name, **{split: [r[name][split] for r in results] for split in ("val", "test")}}
+            for name in candidates + BLENDS]
+    record.add("r2" + variant(overrides), {**common, "rows": rows, "fit_s": [r["fit_s"] for r in results]},
+               seeds=seeds)
+    record.add("weights" + variant(overrides),
+               {**common, **{rule: [r["weights"][rule] for r in results]
+                             for rule in ("paper", "stacking", "stacking_fallback")}}, seeds=seeds)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--seeds", type=int, nargs="*", default=[0, 1, 2])
+    parser.add_argument("overrides", nargs="*")
+    args = parser.parse_args(argv)
+    overrides = args.overrides or DEFAULT
+    with recording("blend_weights", MEASURED_CODE) as record:
+        results = []
+        for seed in args.seeds:
+            result, targets, candidates, settings = one_seed(seed, overrides)
+            results.append(result)
+        print_table(args.seeds, overrides, results, targets, candidates)
+        record_seeds(record, args.seeds, overrides, results, targets, candidates, settings)
 
 
 if __name__ == "__main__":

@@ -15,7 +15,8 @@ and with a noise term beside them:
 Per reading, mean ± sd over the seeds: test R², RMSE, median absolute error, the share of test
 presses more than 1 N off, the median spacing of the distinct training readings (in the
 reading's units; the kernel's length scale is 1), and on the 300-press sweep between the levels
-the roughness (rms departure from a cubic, row 5's measure) and R².
+the roughness (rms departure from a cubic, row 5's measure) and R². Appended to
+results/capacitive_gp.jsonl.
 """
 import argparse
 import os
@@ -29,11 +30,15 @@ from sklearn.metrics import r2_score
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from common.threads import apply_threads, configured_threads  # noqa: E402
 from runs.fidelity import capacitive6x6 as rows  # noqa: E402
 from runs.fidelity.observations import mean_sd, scene_params  # noqa: E402
 
 NOISE_TERM_N2 = 1e-3
+# What the table measures: the paper-configured GP, its split and per-cell fit (runs/fidelity), and
+# the scene and its config that draw the presses.
+MEASURED_CODE = ["runs/fidelity/capacitive6x6.py", "data/scenes/", "configs/scene/"]
 
 
 def readings(rmc_train: np.ndarray) -> dict:
@@ -68,19 +73,29 @@ def measure(probe: rows.CapacitiveProbe) -> dict:
     return out
 
 
+def print_table(results: dict, seeds: int):
+    keys = list(next(iter(results.values())))
+    print(f"paper-configured GP, paper's split, seeds 0-{seeds - 1} (mean ± sd; load average "
+          f"{os.getloadavg()[0]:.1f})\n")
+    print("| reading | " + " | ".join(keys) + " |\n|---|" + "---|" * len(keys))
+    for name, values in results.items():
+        print(f"| {name} | " + " | ".join(mean_sd(values[k], 4) for k in keys) + " |")
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--seeds", type=int, default=3)
     args = parser.parse_args(argv)
     apply_threads(configured_threads() or 1)
-    probe = rows.CapacitiveProbe(scene_params("capacitive6x6"), seeds=range(args.seeds))
-    results = measure(probe)
-    keys = list(next(iter(results.values())))
-    print(f"paper-configured GP, paper's split, seeds 0-{args.seeds - 1} (mean ± sd; load average "
-          f"{os.getloadavg()[0]:.1f})\n")
-    print("| reading | " + " | ".join(keys) + " |\n|---|" + "---|" * len(keys))
-    for name, values in results.items():
-        print(f"| {name} | " + " | ".join(mean_sd(values[k], 4) for k in keys) + " |")
+    with recording("capacitive_gp", MEASURED_CODE) as record:
+        probe = rows.CapacitiveProbe(scene_params("capacitive6x6"), seeds=range(args.seeds))
+        results = measure(probe)
+        print_table(results, args.seeds)
+        # rows and columns in the printed order (a record's keys are stored sorted); a value per seed in each cell
+        record.add("gp_readings", {"scene": "capacitive6x6", "split": "paper", "noise_term_n2": NOISE_TERM_N2,
+                                   "measures": list(next(iter(results.values()))),
+                                   "rows": [{"reading": name, **values} for name, values in results.items()]},
+                   seeds=list(probe.seeds))
 
 
 if __name__ == "__main__":

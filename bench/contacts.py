@@ -42,6 +42,7 @@ from omegaconf import OmegaConf  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from models.contact_tracking.force import force_reader  # noqa: E402
 from models.contact_tracking.timing import latency_summary, timed_updates  # noqa: E402
 from runs.studies.capacitive_tracking import fit_force_pipeline, make_tracker  # noqa: E402
@@ -86,20 +87,17 @@ def one_run(stream, frames, params, force) -> tuple[float, float, float]:
     return summary["p50_us"], summary["p99_us"], float(np.mean([len(c) for c in contacts]))
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--scene", default="capacitive6x6_muca")
-    parser.add_argument("--seed", type=int, default=0, help="the sessions stream's seed")
-    parser.add_argument("--five-seed", type=int, default=1, help="a seed whose hold session draws 5 contacts")
-    parser.add_argument("--runs", type=int, default=5, help="timed runs per stream and tracker (>= 3 for a spread)")
-    parser.add_argument("--force-repetitions", type=int, default=10, help="presses per level and cell for the force fit")
-    args = parser.parse_args(argv)
+# What the timing measures: the tracker, the study that builds it, the scene that draws the frames.
+MEASURED_CODE = ["models/contact_tracking/", "runs/studies/capacitive_tracking.py", "data/scenes/"]
+
+
+def measure(args) -> list[dict]:
     named_streams = streams(args.scene, args.seed, args.five_seed)
     named_trackers = trackers(study_config(args.scene, args.seed), args.force_repetitions)
     print(f"scene {args.scene}; load average at start: {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores\n")
     print("| stream | tracker | contacts per frame | p50 (us) | p99 (us) |")
     print("|---|---|---|---|---|")
-    names = list(named_trackers)
+    names, rows = list(named_trackers), []
     for stream_name, (stream, frames) in named_streams.items():
         runs = {name: [] for name in names}
         for run in range(args.runs + 1):  # run 0 warms up; then ABCD, DCBA, ABCD, ...
@@ -111,8 +109,24 @@ def main(argv=None):
             p50, p99, found = np.array(runs[name]).T
             print(f"| {stream_name} | {name} | {found[0]:.1f} | {p50.mean():.1f} ± {p50.std(ddof=1):.1f} | "
                   f"{p99.mean():.1f} ± {p99.std(ddof=1):.1f} |", flush=True)
+            rows.append({"stream": stream_name, "tracker": name, "contacts_per_frame": found[0],
+                         "p50_us": p50, "p99_us": p99})
     print(f"\n{args.runs} runs each (mean ± sd of the per-run figures); load average at end: "
           f"{os.getloadavg()[0]:.1f}")
+    return rows
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--scene", default="capacitive6x6_muca")
+    parser.add_argument("--seed", type=int, default=0, help="the sessions stream's seed")
+    parser.add_argument("--five-seed", type=int, default=1, help="a seed whose hold session draws 5 contacts")
+    parser.add_argument("--runs", type=int, default=5, help="timed runs per stream and tracker (>= 3 for a spread)")
+    parser.add_argument("--force-repetitions", type=int, default=10, help="presses per level and cell for the force fit")
+    args = parser.parse_args(argv)
+    with recording("contacts", MEASURED_CODE) as record:
+        rows = measure(args)
+        record.add("timing", {"scene": args.scene, "rows": rows}, seeds=[args.seed, args.five_seed])
 
 
 if __name__ == "__main__":

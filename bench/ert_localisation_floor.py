@@ -37,6 +37,9 @@ beat it where the information is poor, and at low signal no estimator reaches it
 Check (`--check-sessions`): the same presses re-simulated in independent sessions with every
 effect but hysteresis; the whitened residual's chi^2 per press should average the number of
 transfer resistances (276) if the noise model above is the scene's.
+
+Appends one record per layout (the table's cells per sensor, and the check) to
+results/ert_localisation_floor.jsonl.
 """
 import argparse
 import json
@@ -51,6 +54,7 @@ from omegaconf import OmegaConf
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from data.scenes.ert import ERTScene, patch_loads_n  # noqa: E402
 from models.ert.readings import transfer_basis, unique_transfer_entries  # noqa: E402
 
@@ -59,6 +63,11 @@ RANDOM_PRESS_EFFECTS = ("hysteresis", "viscoelastic_hysteresis")
 # (a scene with electrode_contact_impedance would show its drift in the chi^2 check)
 READING = ("electrode_contact_impedance", "baseline_drift", "adc_noise")
 BOUNDS = ("adc", "adc_drift", "unknown_sensitivity")
+# What the bound is computed from: the scene's forward model and effects (and their configs), the
+# transfer-resistance basis, and this file, where the Fisher information itself is worked out.
+MEASURED_CODE = ["data/scenes/ert.py", "data/scenes/ert_effects.py", "data/physics/sheet_conduction.py",
+                 "data/physics/press_update.py", "data/physics/textile_contact.py", "models/ert/readings.py",
+                 "configs/scene/", "bench/ert_localisation_floor.py"]
 
 
 def scene_node(layout: str) -> dict:
@@ -234,23 +243,58 @@ def main(argv=None):
     normals = np.random.default_rng(0).standard_normal((4000, 2))
     rows, checks = [], []
     print(f"load average at start: {os.getloadavg()[0]:.2f}", flush=True)
-    for layout in args.layouts:
-        node = scene_node(layout)
-        for seed in args.seeds:
-            part, check = bounds_for(layout, node, seed, args.noise_v, sorted(args.forces), args, normals)
-            rows += part
-            checks += [{"layout": layout, **c} for c in check]
-            for c in check:
-                print(f"{layout} seed {seed} noise {c['noise_v']:g}: noise-model check chi2/dof "
-                      f"{c['chi2_per_dof']:.3f} over {c['n_frames']} frames", flush=True)
-    print(f"load average at end: {os.getloadavg()[0]:.2f}\n")
-    print_table(rows)
+    with recording("ert_localisation_floor", MEASURED_CODE) as record:
+        for layout in args.layouts:
+            node = scene_node(layout)
+            for seed in args.seeds:
+                part, check = bounds_for(layout, node, seed, args.noise_v, sorted(args.forces), args, normals)
+                rows += part
+                checks += [{"layout": layout, **c} for c in check]
+                for c in check:
+                    print(f"{layout} seed {seed} noise {c['noise_v']:g}: noise-model check chi2/dof "
+                          f"{c['chi2_per_dof']:.3f} over {c['n_frames']} frames", flush=True)
+        print(f"load average at end: {os.getloadavg()[0]:.2f}\n")
+        cells = summarise(rows)
+        print_table(cells)
+        record_layouts(record, cells, checks, args)
     if args.json:
         args.json.write_text(json.dumps({"rows": rows, "checks": checks}, indent=1))
     return 0
 
 
-def print_table(rows):
+def summarise(rows) -> list[dict]:
+    """Per layout, noise and force, per sensor: each bound's mean E|e| over the presses, its
+    optimistic reading's, and the presses it leaves uninformed on one axis; and each bound's
+    median press over all sensors. What the table prints and the records keep."""
+    cells = []
+    for key in sorted({(r["layout"], r["noise_v"], r["force_n"]) for r in rows}):
+        here = [r for r in rows if (r["layout"], r["noise_v"], r["force_n"]) == key]
+        seeds = sorted({r["seed"] for r in here})
+
+        def per_seed(field, reduce=np.mean):
+            return [float(reduce([r[field] for r in here if r["seed"] == s])) for s in seeds]
+
+        cells.append({"layout": key[0], "noise_v": key[1], "force_n": key[2], "seeds": seeds,
+                      "presses_per_sensor": len(here) // len(seeds),
+                      "mean_mm_per_seed": {b: per_seed(b) for b in BOUNDS},
+                      "optimistic_mm_per_seed": {b: per_seed(f"{b}_optimistic") for b in BOUNDS},
+                      "uninformed_per_seed": {b: per_seed(f"{b}_uninformed", np.sum) for b in BOUNDS},
+                      "median_press_mm": {b: float(np.median([r[b] for r in here])) for b in BOUNDS}})
+    return cells
+
+
+def record_layouts(record, cells, checks, args):
+    """One record per layout: its cells (per sensor) and its noise-model checks, with the settings."""
+    for layout in dict.fromkeys(cell["layout"] for cell in cells):
+        record.add(layout, {"layout": layout, "forces_n": sorted(args.forces), "noise_v": args.noise_v,
+                            "step_mm": args.step_mm, "step_relative": args.step_relative,
+                            "check_sessions": args.check_sessions, "bounds": list(BOUNDS),
+                            "cells": [cell for cell in cells if cell["layout"] == layout],
+                            "noise_check": [check for check in checks if check["layout"] == layout]},
+                   seeds=args.seeds)
+
+
+def print_table(cells):
     """Per layout, noise and force: each bound's mean E|e| over presses, mean +- sd over sensors;
     for the last, also its optimistic reading, its median press and how many presses it leaves
     uninformed on one axis."""
@@ -258,20 +302,18 @@ def print_table(rows):
     print("| layout | noise (V) | force (N) | " + " | ".join(f"{b} (mm)" for b in BOUNDS)
           + f" | {last}, uninformed axes exact (mm) | {last}, median press (mm) | presses uninformed on one axis |")
     print("|---|---|---|" + "---|" * (len(BOUNDS) + 3))
-    for key in sorted({(r["layout"], r["noise_v"], r["force_n"]) for r in rows}):
-        here = [r for r in rows if (r["layout"], r["noise_v"], r["force_n"]) == key]
-        seeds = sorted({r["seed"] for r in here})
-        cells = []
-        for bound in BOUNDS:
-            per_seed = [np.mean([r[bound] for r in here if r["seed"] == s]) for s in seeds]
-            sd = np.std(per_seed, ddof=1) if len(per_seed) > 1 else 0.0
-            cells.append(f"{np.mean(per_seed):.2f} ± {sd:.2f}")
-        optimistic = [np.mean([r[f"{last}_optimistic"] for r in here if r["seed"] == s]) for s in seeds]
-        cells.append(f"{np.mean(optimistic):.2f} ± {np.std(optimistic, ddof=1) if len(seeds) > 1 else 0.0:.2f}")
-        cells.append(f"{np.median([r[last] for r in here]):.2f}")
-        cells.append(f"{np.mean([r[f'{last}_uninformed'] for r in here]) * len(here) / len(seeds):.1f} "
-                     f"of {len(here) // len(seeds)}")
-        print(f"| {key[0]} | {key[1]:g} | {key[2]:g} | " + " | ".join(cells) + " |")
+    for cell in cells:
+        texts = [mean_sd_cell(cell["mean_mm_per_seed"][bound]) for bound in BOUNDS]
+        texts.append(mean_sd_cell(cell["optimistic_mm_per_seed"][last]))
+        texts.append(f"{cell['median_press_mm'][last]:.2f}")
+        texts.append(f"{np.mean(cell['uninformed_per_seed'][last]):.1f} of {cell['presses_per_sensor']}")
+        print(f"| {cell['layout']} | {cell['noise_v']:g} | {cell['force_n']:g} | " + " | ".join(texts) + " |")
+
+
+def mean_sd_cell(per_seed) -> str:
+    sd = np.std(per_seed, ddof=1) if len(per_seed) > 1 else 0.0
+    return f"{np.mean(per_seed):.2f} ± {sd:.2f}"
+
 
 if __name__ == "__main__":
     sys.exit(main())

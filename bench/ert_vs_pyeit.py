@@ -38,13 +38,15 @@ bench/ert_localisation_floor.py.
 
 Costs: set-up (pyEIT: mesh + Jacobian + H; Touchstone: the fit, which for GREIT includes
 simulating its training presses), per-frame reconstruction (batch 1, numpy, median of 200).
-Output: a markdown table on stdout and --json.
+Output: a markdown table on stdout and --json; appends one record per layout, noise level and
+method to results/ert_vs_pyeit.jsonl (only when the comparison ran: not without pyEIT, not --table-from).
 """
 import argparse
 import json
 import os
 import sys
 import time
+from importlib import metadata
 from pathlib import Path
 
 import numpy as np
@@ -55,12 +57,20 @@ from omegaconf import OmegaConf
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+# the module, not its `recording`: here a recording is a sensor's (calibration, single_point)
+from common import result_records  # noqa: E402
 from data.scenes.ert import injection_pairs  # noqa: E402
 from models.ert.image_readout import thresholded_centroid  # noqa: E402
 from runs.studies.ert_tests import RECONSTRUCTIONS, fit_reconstruction, chosen_hyperparameters  # noqa: E402
 
 THRESHOLDS = (0.3, 0.5, 0.7)
 PYEIT_LAMBDAS = (1e-3, 1e-2, 1e-1)
+# What the errors and costs measure: the scene that draws the frames (and the other sensors the
+# learned methods train on), Touchstone's reconstructions and the study that fits them; pyEIT's
+# version is in each record's values.
+MEASURED_CODE = ["data/scenes/ert.py", "data/scenes/ert_effects.py", "data/physics/sheet_conduction.py",
+                 "data/physics/press_update.py", "data/physics/textile_contact.py", "models/ert/",
+                 "models/tikhonov_reconstruction.py", "runs/studies/ert_tests.py", "configs/scene/"]
 
 
 def scene_cfg(layout: str, noise_v: float, overrides=()):
@@ -177,26 +187,8 @@ def per_frame_ms(method, frames, calls=200):
     return 1e3 * float(np.median(times))
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--layouts", nargs="*", default=["ert_boundary", "ert_internal"])
-    parser.add_argument("--seeds", nargs="*", type=int, default=[0, 1, 2])
-    parser.add_argument("--forces", nargs=2, type=float, default=[4.0, 10.0])
-    parser.add_argument("--noise-v", nargs="*", type=float, default=[2e-4, 1e-3])
-    parser.add_argument("--greit-presses", type=int, default=600, help="training presses per simulated sensor")
-    parser.add_argument("--methods", nargs="*", default=["pyeit_jac", "pyeit_greit", *RECONSTRUCTIONS])
-    parser.add_argument("--json", type=Path, default=None)
-    parser.add_argument("--table-from", nargs="*", type=Path, default=None,
-                        help="print the table from the --json files of earlier runs (e.g. methods run apart) and stop")
-    args = parser.parse_args(argv)
-    if args.table_from:
-        print_table([row for path in args.table_from for row in json.loads(path.read_text())])
-        return 0
-    try:
-        import pyeit  # noqa: F401
-    except ImportError:
-        print("bench/ert_vs_pyeit.py: pyEIT is not installed (pip install pyeit==1.2.4, in requirements-dev.txt); skipped")
-        return 0
+def compare(args) -> list[dict]:
+    """Every method on every layout, noise level and sensor: one row per force, printed as it comes."""
     rows = []
     print(f"load average at start: {load():.2f}", flush=True)
     for layout in args.layouts:
@@ -230,6 +222,45 @@ def main(argv=None):
                           + ", ".join(f"{r['force_n']:g} N {r['localisation_mm']:.2f} mm" for r in rows[-2:])
                           + f"; set-up {method.setup_s:.2f} s, {ms:.3f} ms/frame, {method.chosen()}, load {load():.2f}",
                           flush=True)
+    return rows
+
+
+def record_rows(record, rows, args):
+    """One record per layout, noise level and method, with its rows per seed and force."""
+    version = metadata.version("pyeit")
+    for layout, noise_v, method in dict.fromkeys((r["layout"], r["noise_v"], r["method"]) for r in rows):
+        part = [r for r in rows if (r["layout"], r["noise_v"], r["method"]) == (layout, noise_v, method)]
+        record.add(f"{layout}/noise_{noise_v:g}/{method}",
+                   {"layout": layout, "noise_v": noise_v, "method": method, "forces_n": sorted(args.forces),
+                    "greit_presses": args.greit_presses if method.startswith("greit") else None,
+                    "pyeit_version": version, "rows": part}, seeds=args.seeds)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--layouts", nargs="*", default=["ert_boundary", "ert_internal"])
+    parser.add_argument("--seeds", nargs="*", type=int, default=[0, 1, 2])
+    parser.add_argument("--forces", nargs=2, type=float, default=[4.0, 10.0])
+    parser.add_argument("--noise-v", nargs="*", type=float, default=[2e-4, 1e-3])
+    parser.add_argument("--greit-presses", type=int, default=600, help="training presses per simulated sensor")
+    parser.add_argument("--methods", nargs="*", default=["pyeit_jac", "pyeit_greit", *RECONSTRUCTIONS])
+    parser.add_argument("--json", type=Path, default=None)
+    parser.add_argument("--table-from", nargs="*", type=Path, default=None,
+                        help="print the table from the --json files of earlier runs (e.g. methods run apart) and stop")
+    args = parser.parse_args(argv)
+    if args.table_from:
+        print_table([row for path in args.table_from for row in json.loads(path.read_text())])
+        return 0
+    try:
+        import pyeit  # noqa: F401
+    except ImportError:
+        print("bench/ert_vs_pyeit.py: pyEIT is not installed (pip install pyeit==1.2.4, in requirements-dev.txt); skipped")
+        return 0
+    # Records only when the comparison ran, one per layout, noise and method: methods run apart
+    # (as docs/ert.md's commands do) each keep their newest.
+    with result_records.recording("ert_vs_pyeit", MEASURED_CODE) as record:
+        rows = compare(args)
+        record_rows(record, rows, args)
     if args.json:
         args.json.write_text(json.dumps(rows, indent=1))
     print(f"load average at end: {load():.2f}\n")

@@ -26,6 +26,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
+from common.result_records import recording  # noqa: E402
 from common.threads import apply_threads, configured_threads  # noqa: E402
 from runs.fidelity.observations import (  # noqa: E402
     SEEDS, CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, mean_sd, run_checks, scene_params,
@@ -84,7 +85,21 @@ def _random_press_r2(params, pattern) -> str:
     return " / ".join(mean_sd(column, 3) for column in np.array(scores).T)
 
 
-def scene_section(scene: str, args) -> tuple[str, int, int, int]:
+# What a fidelity row measures: the scenes, the checks and the models some rows train.
+MEASURED_CODE = ["runs/fidelity/", "data/", "models/", "configs/scene/"]
+
+
+def record_rows(record, rows, config: str):
+    """One record per row: the verdict, the words it is shown in, and the raw numbers per seed."""
+    for row in rows:
+        record.add(f"{row.scene}/{row.number}",
+                   {"number": row.number, "statement": row.statement, "paper": row.paper, "config": config,
+                    "value": row.measured.value, "holds": row.measured.holds, "tolerance": row.measured.tolerance,
+                    "numbers": row.measured.numbers},
+                   seeds=row.measured.numbers.get("seeds", SEEDS))
+
+
+def scene_section(scene: str, args, record=None) -> tuple[str, int, int, int]:
     """One scene's markdown section, and its rows held / measured / total."""
     start = time.perf_counter()
     if not load_scene(scene):
@@ -93,6 +108,8 @@ def scene_section(scene: str, args) -> tuple[str, int, int, int]:
     config = args.config or CONFIGS[scene]
     probe = make_probe(scene, args.overrides, args.repeats, config)
     rows = run_checks(scene, probe)
+    if record is not None:
+        record_rows(record, rows, config)
     held = sum(row.measured.holds is True for row in rows)
     measured = sum(row.measured.holds is not None for row in rows)
     text = (f"## {scene}\n\n`scene={config}`: {held} of {len(rows)} rows hold ({measured} measured; "
@@ -113,6 +130,7 @@ def main(argv=None):
                              "passes per level, 15; ert: two-point presses, 10); default: each scene's own")
     parser.add_argument("--json", action="store_true")
     parser.add_argument("--out", type=Path, help="also write the markdown to this file")
+    parser.add_argument("--no-record", action="store_true", help="print only; append nothing to results/")
     parser.add_argument("--patterns", action="store_true", help="rubber12: compare readout patterns instead")
     parser.add_argument("overrides", nargs="*", help="Hydra overrides, e.g. scene.measurement=opposite")
     args = parser.parse_args(argv)
@@ -130,11 +148,15 @@ def main(argv=None):
         print(json.dumps([asdict(row) for row in rows], indent=1, default=float))
         return
     sections, totals = [], np.zeros(3, dtype=int)
-    for scene in scenes:
-        text, *counts = scene_section(scene, args)
-        print(text, flush=True)
-        sections.append(text)
-        totals += counts
+    # Rows measured on a scene's own config, with no overrides, are what docs/fidelity.md shows:
+    # those are recorded (results/fidelity.jsonl); a variant run only prints.
+    own = not (args.config or args.overrides or args.repeats) and not args.no_record
+    with recording("fidelity", MEASURED_CODE) as record:
+        for scene in scenes:
+            text, *counts = scene_section(scene, args, record if own else None)
+            print(text, flush=True)
+            sections.append(text)
+            totals += counts
     summary = (f"**{totals[0]} of {totals[2]} rows hold over {len(sections)} scene(s)** "
                f"({totals[1]} measured; load average {os.getloadavg()[0]:.2f})")
     print(summary)

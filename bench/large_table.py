@@ -9,6 +9,7 @@ temporary folder; then runs `train.py data=table` on it `--runs` times, one thre
 reads the log as it arrives and stops each run once its features are computed. Prints, per run
 and as mean ± sd: seconds from the command's start to the `reading` line, the read, the check and
 split (the read's line to the `data split` line), the features, and the run's CPU time so far.
+Appends every run's phases to results/large_table.jsonl (record `phases_<rows>_rows`).
 """
 import argparse
 import os
@@ -25,7 +26,13 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from common.spread import format_mean_sd  # noqa: E402
+
+# What a large table goes through up to its features: train.py and the run it starts, the
+# reader and its checks, the split, the datamodule and its features.
+MEASURED_CODE = ["train.py", "runs/run.py", "data/readers/", "data/sensor_table.py", "data/units.py", "data/splits/",
+                 "data/datamodules/regression.py", "data/preprocessing/", "common/progress.py"]
 
 
 def write_table(path: Path, rows: int) -> None:
@@ -73,6 +80,22 @@ def one_run(csv: Path, out: Path) -> dict:
     return phases
 
 
+def timed_runs(rows: int, count: int) -> tuple[list[dict], float]:
+    """Each run's seconds per phase on a fresh table of `rows` rows, and the table's size in MB."""
+    with tempfile.TemporaryDirectory(prefix="touchstone-large-table-") as folder:
+        csv = Path(folder) / "rig.csv"
+        write_table(csv, rows)
+        size_mb = csv.stat().st_size / 1e6
+        print(f"{csv.name}: {rows:,} rows, {size_mb:.1f} MB; load {os.getloadavg()[0]:.2f}")
+        runs = []
+        for index in range(count):
+            runs.append(one_run(csv, Path(folder) / f"run{index}"))
+            print(f"run {index}: " + ", ".join(f"{k} {v:.2f} s" for k, v in runs[-1].items()), flush=True)
+    print("mean ± sd: " + ", ".join(f"{k} {format_mean_sd([r[k] for r in runs])} s" for k in runs[0])
+          + f"; load {os.getloadavg()[0]:.2f}")
+    return runs, size_mb
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--rows", type=int, default=2_000_000)
@@ -81,16 +104,13 @@ def main(argv=None):
     if args.rows < 1000 or args.runs < 1:
         print("large_table: --rows must be >= 1000 and --runs >= 1", file=sys.stderr)
         sys.exit(2)
-    with tempfile.TemporaryDirectory(prefix="touchstone-large-table-") as folder:
-        csv = Path(folder) / "rig.csv"
-        write_table(csv, args.rows)
-        print(f"{csv.name}: {args.rows:,} rows, {csv.stat().st_size / 1e6:.1f} MB; load {os.getloadavg()[0]:.2f}")
-        runs = []
-        for index in range(args.runs):
-            runs.append(one_run(csv, Path(folder) / f"run{index}"))
-            print(f"run {index}: " + ", ".join(f"{k} {v:.2f} s" for k, v in runs[-1].items()), flush=True)
-        print("mean ± sd: " + ", ".join(f"{k} {format_mean_sd([r[k] for r in runs])} s" for k in runs[0])
-              + f"; load {os.getloadavg()[0]:.2f}")
+    with recording("large_table", MEASURED_CODE) as record:
+        runs, size_mb = timed_runs(args.rows, args.runs)
+        # The size is in the name: a quick run on a small table does not stand in for the default's.
+        record.add(f"phases_{args.rows}_rows",
+                   {"rows": args.rows, "size_mb": size_mb, "threads": 1, "scene": "rubber12",
+                    **{f"{phase}_s_by_run": [run[phase] for run in runs] for phase in runs[0]}},
+                   seeds=[0])
 
 
 if __name__ == "__main__":

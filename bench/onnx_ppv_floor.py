@@ -20,6 +20,7 @@ one thread, batch 1, median of `--repeats` x 50 calls. The layout follows the ex
 dilation, the 84 kernels' outputs (84, 1, L) against their biases (84, features at that dilation),
 with MiniRocket's dilations and feature counts at each length (dilations_and_features). Compare
 with aeon's predict per recording in bench/rocket_parity.py, run beside it under the same load.
+Appends one record per length (each repeat's median per formulation) to results/onnx_ppv_floor.jsonl.
 """
 import argparse
 import os
@@ -36,11 +37,16 @@ import onnx  # noqa: E402
 import onnxruntime as ort  # noqa: E402
 from onnx import TensorProto, helper, numpy_helper  # noqa: E402
 
+from common.result_records import recording  # noqa: E402
 from models.rocket.minirocket import N_KERNELS, dilations_and_features  # noqa: E402
 
 FORMULATIONS = ("greater_cast_mean", "sub_sign_sum", "greater_uint8_matmul", "binarizer_mean", "relu_min_sum",
                 "kernel_blocks", "time_blocks")
 BLOCK_ELEMENTS = 1 << 18   # comparisons per block in the blocked formulations: 1 MB of float 0/1, half of L2 here
+CALLS = 50                 # calls per repeat; a repeat's figure is their median
+# The graphs timed are built here, on MiniRocket's layout (dilations and features per length) and
+# against the count its exported graph makes (greater_cast_mean).
+MEASURED_CODE = ["bench/onnx_ppv_floor.py", "models/rocket/minirocket.py"]
 
 
 def blocked_nodes(formulation: str, biases: np.ndarray, length: int, k: int) -> tuple[list, list]:
@@ -146,18 +152,37 @@ def count_graph(formulation: str, biases: list, length: int) -> onnx.ModelProto:
     return helper.make_model(graph, opset_imports=[helper.make_opsetid("", 18), helper.make_opsetid("ai.onnx.ml", 3)])
 
 
-def time_ms(session, feed, repeats: int, clock=time.perf_counter) -> float:
+def time_ms(session, feed, repeats: int, clock=time.perf_counter) -> list[float]:
+    """Each repeat's median milliseconds per call, after five warm-up calls."""
     for _ in range(5):
         session.run(None, feed)
     medians = []
     for _ in range(repeats):
         calls = []
-        for _ in range(50):
+        for _ in range(CALLS):
             start = clock()
             session.run(None, feed)
             calls.append(clock() - start)
         medians.append(1e3 * float(np.median(calls)))
-    return float(np.median(medians))
+    return medians
+
+
+def measure_length(length: int, args, rng, options, clock) -> dict:
+    """Each formulation's per-repeat milliseconds at one length, checked to count as numpy does."""
+    _, counts = dilations_and_features(length, 9_996)
+    outputs = [rng.normal(size=(N_KERNELS, 1, length)).astype(np.float32) for _ in counts]
+    biases = [np.sort(rng.normal(size=(N_KERNELS, count)), axis=1).astype(np.float32) for count in counts]
+    reference = np.concatenate([(c > b[:, :, None]).mean(axis=2) for c, b in zip(outputs, biases)], axis=1)
+    feed = {f"c{k}": c for k, c in enumerate(outputs)}
+    ms = {}
+    for formulation in args.formulations:
+        session = ort.InferenceSession(count_graph(formulation, biases, length).SerializeToString(), options,
+                                       providers=["CPUExecutionProvider"])
+        ppv = session.run(None, feed)[0]
+        assert np.abs(ppv - reference).max() <= 1.0 / length + 1e-6, formulation   # the same counts, up to a tie
+        ms[formulation] = time_ms(session, feed, args.repeats, clock)
+    return {"length": length, "dilations": len(counts), "features_per_kernel": reference.shape[1],
+            "comparisons": reference.size * length, "ms_by_repeat": ms, "load_average": os.getloadavg()[0]}
 
 
 def main():
@@ -175,21 +200,17 @@ def main():
     clock = time.process_time if args.cpu_time else time.perf_counter
     print("| length | dilations, features x L (comparisons) | " + " | ".join(args.formulations) + " | load average |")
     print("|---|---|" + "---|" * len(args.formulations) + "---|")
-    for length in args.lengths:
-        _, counts = dilations_and_features(length, 9_996)
-        outputs = [rng.normal(size=(N_KERNELS, 1, length)).astype(np.float32) for _ in counts]
-        biases = [np.sort(rng.normal(size=(N_KERNELS, count)), axis=1).astype(np.float32) for count in counts]
-        reference = np.concatenate([(c > b[:, :, None]).mean(axis=2) for c, b in zip(outputs, biases)], axis=1)
-        feed = {f"c{k}": c for k, c in enumerate(outputs)}
-        cells = []
-        for formulation in args.formulations:
-            session = ort.InferenceSession(count_graph(formulation, biases, length).SerializeToString(), options,
-                                           providers=["CPUExecutionProvider"])
-            ppv = session.run(None, feed)[0]
-            assert np.abs(ppv - reference).max() <= 1.0 / length + 1e-6, formulation   # the same counts, up to a tie
-            cells.append(f"{time_ms(session, feed, args.repeats, clock):.2f}")
-        print(f"| {length} | {len(counts)}, {reference.shape[1]} x {length} ({reference.size * length / 1e6:.1f} M) | "
-              + " | ".join(cells) + f" | {os.getloadavg()[0]:.1f} |", flush=True)
+    # The clock is in the name: CPU-time figures do not stand in for wall-clock ones.
+    name_suffix = "_cpu_time" if args.cpu_time else ""
+    settings = {"clock": "cpu" if args.cpu_time else "wall", "threads": 1, "batch": 1, "calls_per_repeat": CALLS}
+    with recording("onnx_ppv_floor", MEASURED_CODE) as record:
+        for length in args.lengths:
+            row = measure_length(length, args, rng, options, clock)
+            cells = [f"{np.median(ms):.2f}" for ms in row["ms_by_repeat"].values()]
+            print(f"| {length} | {row['dilations']}, {row['features_per_kernel']} x {length} "
+                  f"({row['comparisons'] / 1e6:.1f} M) | " + " | ".join(cells) + f" | {row['load_average']:.1f} |",
+                  flush=True)
+            record.add(f"length_{length}{name_suffix}", {**row, **settings}, seeds=[0])
 
 
 if __name__ == "__main__":

@@ -16,7 +16,8 @@ method, mean +- sd over seeds: test accuracy, fit time (both one thread), latenc
 (aeon: its predict's share of one call on the whole test set / one call per recording;
 Touchstone: onnxruntime batch-1, one thread, median), the largest gap between the ONNX and the
 eager probabilities, and the load average: other processes share the cores, and both sides meet
-the same load in the same run.
+the same load in the same run. Appends one record per set and method (each seed's figures) to
+results/rocket_parity.jsonl.
 """
 import argparse
 import json
@@ -32,6 +33,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from common.spread import format_mean_sd  # noqa: E402
 from common.threads import apply_threads  # noqa: E402
 
@@ -41,6 +43,9 @@ SETS = ("ItalyPowerDemand", "JapaneseVowels_eq", "BasicMotions", "GunPoint", "Ar
 MEMBERS = ("minirocket", "hydra_minirocket")
 AEON_CLASSIFIERS = ("MiniRocket", "MultiRocketHydra")
 LATENCY_CALLS = 100
+# Touchstone's side: the ROCKET members, the deployable pipeline around them and its ONNX export;
+# and aeon's pin, since the other side of every comparison is the aeon it installs.
+MEASURED_CODE = ["models/rocket/", "models/deployable.py", "export/", "bench/requirements-aeon.txt"]
 
 AEON_SIDE = r'''
 import json, sys, time
@@ -135,6 +140,35 @@ def spread(rows, key, digits=3) -> str:
     return format_mean_sd([r[key] for r in rows], f".{digits}f")
 
 
+def print_table(results: dict, shapes: dict, sets: list):
+    print("\n| set | length x channels | method | accuracy | fit s | latency ms per recording | features | "
+          "ONNX-eager max gap | load average |")
+    print("|---|---|---|---|---|---|---|---|---|")
+    for key in sorted(results, key=lambda k: (sets.index(k.split("|")[0]), k)):
+        rows, (name, method) = results[key], key.split("|")
+        line = (f"| {name} | {shapes[name][0]} x {shapes[name][1]} | {method} | {spread(rows, 'accuracy')} | "
+                f"{spread(rows, 'fit_s', 2)} | ")
+        if method.startswith("Touchstone"):
+            print(line + f"{spread(rows, 'latency_ms', 2)} (ONNX, one call) | {rows[0]['n_features']} | "
+                  f"{max(r['onnx_eager_max_abs'] for r in rows):.1e} | "
+                  f"{np.mean([r['load_average'] for r in rows]):.1f} |")
+        else:
+            print(line + f"{spread(rows, 'batch_share_ms', 2)} (batch share) / {spread(rows, 'latency_ms', 2)} "
+                  "(one call) | | | |")
+
+
+def record_results(record, results: dict, shapes: dict, cpu_time: bool):
+    """One record per set and method, each figure a list over its seeds. The clock is in the
+    name: CPU-time figures do not stand in for wall-clock ones."""
+    for key, rows in results.items():
+        name, method = key.split("|")
+        values = {"set": name, "length": shapes[name][0], "channels": shapes[name][1], "method": method,
+                  "clock": "cpu" if cpu_time else "wall", "threads": 1, "latency_calls": LATENCY_CALLS,
+                  **{column: [row[column] for row in rows] for column in rows[0] if column != "seed"}}
+        record.add(f"{name}/{method.lower().replace(' ', '_')}" + ("/cpu_time" if cpu_time else ""), values,
+                   seeds=[row["seed"] for row in rows])
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--sets", nargs="+", default=list(SETS), choices=SETS)
@@ -151,30 +185,19 @@ def main():
     args = parser.parse_args()
     apply_threads(1)
     shapes = {}
-    with tempfile.TemporaryDirectory() as folder:
+    with tempfile.TemporaryDirectory() as folder, recording("rocket_parity", MEASURED_CODE) as record:
         folder = Path(folder)
         print(f"aeon side ... (load average {os.getloadavg()[0]:.1f})", flush=True)
         results = aeon_results(args.sets, args.seeds, folder, args.aeon, "cpu" if args.cpu_time else "wall")
         for name in args.sets:
             data = np.load(folder / f"{name}.npz")
-            shapes[name] = f"{data['X'].shape[2]} x {data['X'].shape[1]}"
+            shapes[name] = data["X"].shape[2], data["X"].shape[1]     # length, channels
             for member in args.members:
                 results[f"{name}|Touchstone {member}"] = touchstone_rows(
                     data, member, args.seeds, time.process_time if args.cpu_time else time.perf_counter)
             print(f"{name} done (load average {os.getloadavg()[0]:.1f})", flush=True)
-    print("\n| set | length x channels | method | accuracy | fit s | latency ms per recording | features | "
-          "ONNX-eager max gap | load average |")
-    print("|---|---|---|---|---|---|---|---|---|")
-    for key in sorted(results, key=lambda k: (args.sets.index(k.split("|")[0]), k)):
-        rows, (name, method) = results[key], key.split("|")
-        line = f"| {name} | {shapes[name]} | {method} | {spread(rows, 'accuracy')} | {spread(rows, 'fit_s', 2)} | "
-        if method.startswith("Touchstone"):
-            print(line + f"{spread(rows, 'latency_ms', 2)} (ONNX, one call) | {rows[0]['n_features']} | "
-                  f"{max(r['onnx_eager_max_abs'] for r in rows):.1e} | "
-                  f"{np.mean([r['load_average'] for r in rows]):.1f} |")
-        else:
-            print(line + f"{spread(rows, 'batch_share_ms', 2)} (batch share) / {spread(rows, 'latency_ms', 2)} "
-                  "(one call) | | | |")
+        print_table(results, shapes, args.sets)
+        record_results(record, results, shapes, args.cpu_time)
     if args.json:
         args.json.write_text(json.dumps(results, indent=1))
 

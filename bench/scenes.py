@@ -11,6 +11,7 @@ Every figure is a mean +- sd over --repeats runs, run k at scene seed k (each se
 presses, specimen and noise), timed by the process's CPU time: the scenes run on one thread, so
 on an idle machine it equals the wall time, and on a shared one it does not count the time other
 processes held the core. The 1-minute load average is printed beside each scene.
+Appends three records per scene (each seed's CPU seconds per sample) to results/scenes.jsonl.
 """
 import argparse
 import os
@@ -26,6 +27,7 @@ from omegaconf import OmegaConf
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from common.spread import format_mean_sd  # noqa: E402
 
 # full scene -> (minimal scene, the key that sets its size, samples per unit of that key).
@@ -38,6 +40,9 @@ SCENES = {"rubber12_lab": ("rubber12_minimal", "n_samples", 1),
           "capacitive6x6": ("capacitive6x6_minimal", "n_repetitions", 40),
           "ert_boundary": ("ert_minimal", "n_samples", 1),
           "ert_internal": ("ert_minimal", "n_samples", 1)}
+# What a scene's generation runs: the scenes and their effects, the physics they solve, the
+# containers they fill, and the scene configs (the effect lists and their settings).
+MEASURED_CODE = ["data/scenes/", "data/physics/", "data/sensor_table.py", "data/recording_set.py", "configs/scene/"]
 
 
 def load(name: str, n_samples: int, effects=None):
@@ -76,46 +81,69 @@ def spread(values: np.ndarray, digits: int = 0) -> str:
     return format_mean_sd(values, f",.{digits}f")
 
 
+def effect_lists(full: str, n: int, repeats: int) -> dict:
+    """Samples/s with the full and with the minimal effect list."""
+    full_cfg, minimal_cfg = load(full, n), load(SCENES[full][0], n)
+    seconds(load(full, 10), 1)  # warm-up: solver factorisations are cached per process
+    t_full, t_min = seconds(full_cfg, repeats), seconds(minimal_cfg, repeats)
+    print(f"\n## {full} (~{n} samples; seeds 0-{repeats - 1}, mean ± sd; "
+          f"load average {os.getloadavg()[0]:.1f})\n")
+    print("| effect list | effects | samples/s |\n|---|---|---|")
+    print(f"| full | {', '.join(full_cfg.effects)} | {spread(1 / t_full)} |")
+    print(f"| minimal | {', '.join(minimal_cfg.effects) or 'none'} | {spread(1 / t_min)} |")
+    return {"full_effects": list(full_cfg.effects), "minimal_effects": list(minimal_cfg.effects),
+            "full_s_per_sample": t_full, "minimal_s_per_sample": t_min}
+
+
+def effect_costs(full: str, n: int, repeats: int) -> dict:
+    """Seconds per sample of the minimal list and of each list with one more effect, in order.
+    Paired by seed: an effect's cost is the difference of two runs drawing the same presses."""
+    print("\n| effect added (in order) | ms per 1000 samples |\n|---|---|")
+    listed = OmegaConf.to_container(load(full, n).effects)
+    base = {k: v for k, v in listed.items() if k in load(SCENES[full][0], n).effects}
+    previous = seconds(load(full, n, base), repeats)
+    print(f"| (minimal: {', '.join(base) or 'none'}) | {spread(1e6 * previous, 2)} |")
+    costs = {"minimal": list(base), "minimal_s_per_sample": previous, "added": []}
+    current = dict(base)
+    for name, params in listed.items():
+        if name in base:
+            continue
+        current[name] = params
+        now = seconds(load(full, n, current), repeats)
+        print(f"| + {name} | {spread(1e6 * (now - previous), 2)} |")
+        costs["added"].append({"effect": name, "s_per_sample": now})
+        previous = now
+    return costs
+
+
+def sizes(full: str, n: int, repeats: int) -> dict:
+    """Samples/s at half, the same and twice the size: does cost grow linearly with the count?"""
+    print("\n| samples | seconds | samples/s |\n|---|---|---|")
+    rows = []
+    for size in (n // 2, n, 2 * n):
+        cfg = load(full, size)
+        per_sample = seconds(cfg, repeats)
+        count = n_generated(instantiate(cfg).generate())
+        print(f"| {count} | {spread(count * per_sample, 3)} | {spread(1 / per_sample)} |")
+        rows.append({"samples": count, "s_per_sample": per_sample})
+    return {"sizes": rows}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--n", type=int, default=4000, help="samples per timing (fingertip: recordings, ~n/4)")
     parser.add_argument("--repeats", type=int, default=3)
     parser.add_argument("--scenes", nargs="*", default=[s for s in SCENES if (ROOT / f"configs/scene/{s}.yaml").exists()])
     args = parser.parse_args(argv)
+    with recording("scenes", MEASURED_CODE) as record:
+        for full in args.scenes:
+            n = args.n if SCENES[full][2] == 1 else args.n // 4  # fingertip: a recording costs ~4 presses
+            settings = {"scene": full, "minimal_scene": SCENES[full][0], "requested_samples": n, "clock": "cpu"}
+            # --n is in the name: a quick run at another size does not stand in for the default's.
+            for table in (effect_lists, effect_costs, sizes):
+                record.add(f"{full}/n{args.n}/{table.__name__}", {**settings, **table(full, n, args.repeats)},
+                           seeds=list(range(args.repeats)))
 
-    for full in args.scenes:
-        minimal, _, per_unit = SCENES[full]
-        n = args.n if per_unit == 1 else args.n // 4  # fingertip: a recording costs ~4 presses
-        full_cfg, minimal_cfg = load(full, n), load(minimal, n)
-        seconds(load(full, 10), 1)  # warm-up: solver factorisations are cached per process
-        t_full, t_min = seconds(full_cfg, args.repeats), seconds(minimal_cfg, args.repeats)
-        print(f"\n## {full} (~{n} samples; seeds 0-{args.repeats - 1}, mean ± sd; "
-              f"load average {os.getloadavg()[0]:.1f})\n")
-        print("| effect list | effects | samples/s |\n|---|---|---|")
-        print(f"| full | {', '.join(full_cfg.effects)} | {spread(1 / t_full)} |")
-        print(f"| minimal | {', '.join(minimal_cfg.effects) or 'none'} | {spread(1 / t_min)} |")
-
-        # Paired by seed: the effect's cost is the difference of two runs drawing the same presses.
-        print("\n| effect added (in order) | ms per 1000 samples |\n|---|---|")
-        listed = OmegaConf.to_container(full_cfg.effects)
-        base = {k: v for k, v in listed.items() if k in minimal_cfg.effects}
-        previous = seconds(load(full, n, base), args.repeats)
-        print(f"| (minimal: {', '.join(base) or 'none'}) | {spread(1e6 * previous, 2)} |")
-        current = dict(base)
-        for name, params in listed.items():
-            if name in base:
-                continue
-            current[name] = params
-            now = seconds(load(full, n, current), args.repeats)
-            print(f"| + {name} | {spread(1e6 * (now - previous), 2)} |")
-            previous = now
-
-        print("\n| samples | seconds | samples/s |\n|---|---|---|")
-        for size in (n // 2, n, 2 * n):
-            cfg = load(full, size)
-            per_sample = seconds(cfg, args.repeats)
-            count = n_generated(instantiate(cfg).generate())
-            print(f"| {count} | {spread(count * per_sample, 3)} | {spread(1 / per_sample)} |")
 
 if __name__ == "__main__":
     main()

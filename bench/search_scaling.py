@@ -19,6 +19,7 @@ durability (every commit flushed to disk, as on a real server), so every study a
 schema race of an empty database.
 Lost: a counted trial that did not complete; duplicated: a trial number, job folder or
 parameter set run twice (a re-queued trial aside).
+Appends its per-study numbers to results/search_scaling.jsonl (common/result_records.py).
 """
 import argparse
 import os
@@ -38,6 +39,7 @@ from optuna.trial import TrialState
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from common.run_status import run_status  # noqa: E402
 from hydra_plugins.touchstone_optuna_sweeper.lost_trials import trial_job  # noqa: E402
 from hydra_plugins.touchstone_optuna_sweeper.study_budget import counted  # noqa: E402
@@ -45,6 +47,12 @@ from runs.throwaway_postgres import missing, throwaway_postgres  # noqa: E402
 
 SEARCH = ["hparams_search=resmlp_optuna", "hydra.sweeper.n_startup_trials=4", "hydra.sweeper.study_name=bench",
           "scene.n_samples=120", "scene.grid_nodes=21", "scene.progress=false", "trainer.max_epochs=3"]
+SEED = 0   # the sweeper's sampler seed: hydra.sweeper.seed=${seed}, the config's default seed
+KILL_TRIALS = 6   # trials per two-worker study of the kill loop
+# What the rates and counts measure: the sweeper (ask/tell, lost trials, storage), the search it
+# runs, and the throwaway server whose durability sets PostgreSQL's commit cost.
+MEASURED_CODE = ["hydra_plugins/touchstone_optuna_sweeper/", "configs/hparams_search/resmlp_optuna.yaml",
+                 "runs/throwaway_postgres.py"]
 
 
 def study_run(folder: Path, storage: str, workers: int, n_trials: int, kill: bool) -> dict:
@@ -96,6 +104,48 @@ def one_study(engine: str, workers: int, n_trials: int, kill: bool = False) -> d
             return study_run(folder, storage, workers, n_trials, kill)
 
 
+def spread(values: np.ndarray) -> str:
+    return f"{values.mean():.1f} ± {values.std(ddof=1) if len(values) > 1 else 0:.1f}"
+
+
+def scaling(engines, args) -> list[dict]:
+    """The trials-per-minute table, printed row by row; its rows with the per-study numbers."""
+    print(f"{os.cpu_count()} cores; {args.trials} trials per study; load average: the 1-minute figure before and after")
+    print("| storage | workers | trials/min | speed-up vs 1 worker | storage overhead (ms/trial) | load average |")
+    print("|---|---|---|---|---|---|")
+    rows = []
+    for engine in engines:
+        rates = {}
+        for workers in args.workers:
+            load_before = os.getloadavg()[0]
+            runs = [one_study(engine, workers, args.trials) for _ in range(args.repeats)]
+            load_after = os.getloadavg()[0]
+            rates[workers] = rate = np.array([r["trials_per_min"] for r in runs])
+            overhead = np.array([r["overhead_ms"] for r in runs])
+            speedup = f"{rate.mean() / rates[1].mean():.2f}×" if 1 in rates else "—"
+            print(f"| {engine} | {workers} | {spread(rate)} | {speedup} | {spread(overhead)} "
+                  f"| {load_before:.1f}–{load_after:.1f} |", flush=True)
+            rows.append({"storage": engine, "workers": workers, "trials_per_min": rate, "overhead_ms": overhead,
+                         "load_before": load_before, "load_after": load_after})
+    return rows
+
+
+def kills(engines, n_runs: int) -> list[dict]:
+    """The kill loop's table (every other study with a worker killed); its rows, per study."""
+    print("\n| storage | two-worker studies | with a worker killed | lost | duplicated | re-queued | both contributed |")
+    print("|---|---|---|---|---|---|---|")
+    rows = []
+    for engine in engines:
+        killed = [i % 2 == 1 for i in range(n_runs)]
+        runs = [one_study(engine, 2, KILL_TRIALS, kill=kill) for kill in killed]
+        print(f"| {engine} | {len(runs)} | {n_runs // 2} | {sum(r['lost'] for r in runs)} "
+              f"| {sum(r['duplicated'] for r in runs)} | {sum(r['requeued'] for r in runs)} "
+              f"| {sum(r['workers_contributed'] == 2 for r in runs)} |", flush=True)
+        counts = ("lost", "duplicated", "requeued", "workers_contributed")
+        rows.append({"storage": engine, "killed": killed, **{key: [r[key] for r in runs] for key in counts}})
+    return rows
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--repeats", type=int, default=3)
@@ -105,31 +155,15 @@ def main() -> None:
     parser.add_argument("--storages", nargs="+", choices=["journal", "postgresql"], default=["journal", "postgresql"])
     args = parser.parse_args()
     engines = [e for e in args.storages if e == "journal" or missing() is None]
-    if "postgresql" in args.storages and missing():
-        print(f"PostgreSQL skipped: {missing()}")
-    print(f"{os.cpu_count()} cores; {args.trials} trials per study; load average: the 1-minute figure before and after")
-    print("| storage | workers | trials/min | speed-up vs 1 worker | storage overhead (ms/trial) | load average |")
-    print("|---|---|---|---|---|---|")
-    for engine in engines:
-        rates = {}
-        for workers in args.workers:
-            load_before = os.getloadavg()[0]
-            runs = [one_study(engine, workers, args.trials) for _ in range(args.repeats)]
-            load = f"{load_before:.1f}–{os.getloadavg()[0]:.1f}"
-            rates[workers] = rate = np.array([r["trials_per_min"] for r in runs])
-            overhead = np.array([r["overhead_ms"] for r in runs])
-            speedup = f"{rate.mean() / rates[1].mean():.2f}×" if 1 in rates else "—"
-            print(f"| {engine} | {workers} | {rate.mean():.1f} ± {rate.std(ddof=1) if len(rate) > 1 else 0:.1f} "
-                  f"| {speedup} | {overhead.mean():.1f} ± {overhead.std(ddof=1) if len(overhead) > 1 else 0:.1f} "
-                  f"| {load} |", flush=True)
-    if args.kill_runs:
-        print("\n| storage | two-worker studies | with a worker killed | lost | duplicated | re-queued | both contributed |")
-        print("|---|---|---|---|---|---|---|")
-        for engine in engines:
-            runs = [one_study(engine, 2, 6, kill=i % 2 == 1) for i in range(args.kill_runs)]
-            print(f"| {engine} | {len(runs)} | {args.kill_runs // 2} | {sum(r['lost'] for r in runs)} "
-                  f"| {sum(r['duplicated'] for r in runs)} | {sum(r['requeued'] for r in runs)} "
-                  f"| {sum(r['workers_contributed'] == 2 for r in runs)} |", flush=True)
+    skipped = missing() if "postgresql" in args.storages else None
+    if skipped:
+        print(f"PostgreSQL skipped: {skipped}")
+    with recording("search_scaling", MEASURED_CODE) as record:
+        record.add("scaling", {"trials_per_study": args.trials, "repeats": args.repeats, "cores": os.cpu_count(),
+                               "postgresql_skipped": skipped, "rows": scaling(engines, args)}, seeds=[SEED])
+        if args.kill_runs:
+            record.add("kills", {"studies": args.kill_runs, "trials_per_study": KILL_TRIALS,
+                                 "postgresql_skipped": skipped, "rows": kills(engines, args.kill_runs)}, seeds=[SEED])
 
 
 if __name__ == "__main__":

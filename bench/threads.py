@@ -8,7 +8,8 @@ default (`threads=1`). The slowdown is loaded / idle wall time.
 Workloads: `default_run` = `python train.py` (the blend pipeline, export and latency included),
 `resmlp_run` = `python train.py model=resmlp`, `prcnn_epoch` = one PR-CNN training epoch on
 2,000 windows of the fingertip's shape (2 channels x 140 steps, batch 128), timed in-process
-after start-up. The competing process is a pure-Python busy loop (one core).
+after start-up. The competing process is a pure-Python busy loop (one core). Appends the wall
+times per run to results/threads.jsonl (common/result_records.py).
 """
 import argparse
 import os
@@ -21,6 +22,13 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from common.result_records import recording  # noqa: E402
+
+SEED = 0   # train.py's default seed (configs/config.yaml) and the PR-CNN epoch's data
+# What the wall times measure: the thread setting and the pipeline each workload runs under it.
+MEASURED_CODE = ["common/", "data/", "models/", "export/", "runs/", "configs/", "train.py"]
 WORKLOADS = {
     "default_run": [sys.executable, "train.py", "hydra.run.dir={out}"],
     "resmlp_run": [sys.executable, "train.py", "model=resmlp", "hydra.run.dir={out}"],
@@ -30,7 +38,6 @@ WORKLOADS = {
 
 def prcnn_epoch() -> None:
     """One PR-CNN epoch, configured as experiment=materials10 composes it; prints its seconds."""
-    sys.path.insert(0, str(ROOT))
     import numpy as np
     from hydra import compose, initialize_config_dir
     from hydra.utils import instantiate
@@ -40,7 +47,7 @@ def prcnn_epoch() -> None:
         cfg = compose("config", overrides=["experiment=materials10", "trainer.max_epochs=1",
                                            "trainer.progress=false", "trainer.device=cpu"])
     apply_threads(resolve_threads(os.environ.get("TOUCHSTONE_THREADS", "1")))
-    rng = np.random.default_rng(0)
+    rng = np.random.default_rng(SEED)
     X = rng.standard_normal((2000, 2, 140)).astype(np.float32)
     y = rng.integers(0, 10, 2000)
     model = instantiate(cfg.model, modalities={"triboelectric": [0], "piezoresistive": [1]})
@@ -63,6 +70,23 @@ def wall_time(workload: str, threads: str, out: Path) -> float:
     return float(done.stdout.strip().splitlines()[-1]) if workload == "prcnn_epoch" else seconds
 
 
+def measure(workload: str, threads: str, repeats: int, out: Path) -> tuple:
+    """One workload at one thread setting, idle and beside a busy process: its wall times per run."""
+    times = {}
+    for load in ("idle", "one busy process"):
+        busy = subprocess.Popen([sys.executable, "-c", "while True: pass"]) if load != "idle" else None
+        try:
+            times[load] = np.array([wall_time(workload, threads, out) for _ in range(repeats)])
+        finally:
+            if busy is not None:
+                busy.kill()
+                busy.wait()
+    print(f"{workload:12s} threads={threads:3s} idle {spread(times['idle'])} s   "
+          f"beside one busy process {spread(times['one busy process'])} s   "
+          f"slowdown {times['one busy process'].mean() / times['idle'].mean():.2f}x", flush=True)
+    return workload, threads, times["idle"], times["one busy process"]
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--workloads", nargs="*", default=list(WORKLOADS))
@@ -73,25 +97,16 @@ def main(argv=None):
         return prcnn_epoch()
     out = ROOT / "outputs" / "bench_threads"
     out.mkdir(parents=True, exist_ok=True)
-    rows = []
-    for workload in args.workloads:
-        for threads in ("all", "1"):
-            times = {}
-            for load in ("idle", "one busy process"):
-                busy = subprocess.Popen([sys.executable, "-c", "while True: pass"]) if load != "idle" else None
-                try:
-                    times[load] = np.array([wall_time(workload, threads, out) for _ in range(args.repeats)])
-                finally:
-                    if busy is not None:
-                        busy.kill()
-                        busy.wait()
-            rows.append((workload, threads, times["idle"], times["one busy process"]))
-            print(f"{workload:12s} threads={threads:3s} idle {spread(times['idle'])} s   "
-                  f"beside one busy process {spread(times['one busy process'])} s   "
-                  f"slowdown {times['one busy process'].mean() / times['idle'].mean():.2f}x", flush=True)
-    print("\n| workload | threads | idle (s) | beside one busy process (s) | slowdown |\n|---|---|---|---|---|")
-    for workload, threads, idle, loaded in rows:
-        print(f"| {workload} | {threads} | {spread(idle)} | {spread(loaded)} | {loaded.mean() / idle.mean():.2f}x |")
+    with recording("threads", MEASURED_CODE) as record:
+        rows = [measure(workload, threads, args.repeats, out)
+                for workload in args.workloads for threads in ("all", "1")]
+        print("\n| workload | threads | idle (s) | beside one busy process (s) | slowdown |\n|---|---|---|---|---|")
+        for workload, threads, idle, loaded in rows:
+            print(f"| {workload} | {threads} | {spread(idle)} | {spread(loaded)} | {loaded.mean() / idle.mean():.2f}x |")
+        record.add("slowdown", {"repeats": args.repeats, "cores": os.cpu_count(), "busy_processes": 1,
+                                "timed": "the command's wall time; prcnn_epoch: the epoch alone, in-process",
+                                "rows": [{"workload": w, "threads": t, "idle_s": idle, "loaded_s": loaded}
+                                         for w, t, idle, loaded in rows]}, seeds=[SEED])
 
 
 def spread(values) -> str:

@@ -33,7 +33,9 @@ it ran: the peer and Touchstone are measured in the same script run, under the s
 Results accumulate in --out (default bench/results/tsc_peers/): results.jsonl (one line per run;
 a rerun skips what is there, so a long run can be continued), table.md (set x method, beside the
 published ResNet and InceptionTime accuracies) and pareto.png (the classification Pareto front
-over all families: mean test accuracy over the sets against mean fit time).
+over all families: mean test accuracy over the sets against mean fit time). When a run completes,
+its grid's per-seed rows (Touchstone's and aeon's, those resumed from --out included) are appended to
+results/tsc_peers.jsonl (common/result_records.py), one record per set and method.
 """
 import argparse
 import json
@@ -49,6 +51,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from common.spread import format_mean_sd  # noqa: E402
 from runs.report.pareto import pareto_mask  # noqa: E402
 
@@ -64,6 +67,10 @@ AEON_METHODS = ("aeon:minirocket", "aeon:multirocket_hydra", "aeon:quant")
 NETS = ("prcnn", "rescnn", "inceptiontime", "lstm_fcn")
 DEFAULT = "default"   # train.py with no model=
 NET_LIMIT_S = 15 * 60
+# What the rows measure: Touchstone's whole run as train.py makes it, and the peer's side (its
+# pinned aeon version and how bench/tsc_peers_aeon.py fits and times it).
+MEASURED_CODE = ["train.py", "common/", "data/", "models/", "export/", "runs/", "configs/",
+                 "bench/tsc_peers_aeon.py", "bench/requirements-aeon.txt"]
 SINGLE_THREAD = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
                  "OPENBLAS_NUM_THREADS": "1", "TOUCHSTONE_THREADS": "1", "CI": "true"}
 
@@ -273,6 +280,57 @@ def pareto_figure(rows: list[dict], path: Path) -> str:
     return ", ".join(m for m, f in zip(methods, front) if f)
 
 
+def append_row(results_path: Path, row: dict) -> None:
+    """One run's row into --out's results.jsonl (what a rerun resumes from), and shown."""
+    with results_path.open("a") as f:
+        f.write(json.dumps(row) + "\n")
+    shown = {k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items()}
+    print(json.dumps(shown), flush=True)
+
+
+def run_grid(args, paths: dict, methods, python: Path | None, done: set, results_path: Path) -> None:
+    """Every set x method x seed not in --out yet, each row appended to results_path as it ends."""
+    for name, path in paths.items():
+        for method in methods:
+            seeds = [s for s in args.seeds if (name, method, s) not in done]
+            if not seeds:
+                continue
+            if method.startswith("aeon:"):
+                if python is None:
+                    continue
+                for row in run_aeon(python, path, method, seeds):
+                    append_row(results_path, {"set": name, "method": method, **row})
+                continue
+            net = method in NETS or method.startswith("inceptiontime")
+            for seed in seeds:
+                run_dir = args.out / "runs" / name / method / f"seed{seed}"
+                row = run_touchstone(path, method, seed, run_dir, args.net_limit_min * 60 if net else None)
+                append_row(results_path, {"set": name, "method": method, **row})
+                if net and row.get("timeout"):  # one fit beyond the limit: the other seeds are not run
+                    for rest in seeds[seeds.index(seed) + 1:]:
+                        append_row(results_path, {"set": name, "method": method, "seed": rest, "load": load_average(),
+                                                  "error": f"skipped: seed {seed} took more than "
+                                                           f"{args.net_limit_min:.0f} min"})
+                    break
+
+
+def record_cells(record, rows: list[dict], grid: set, resumed: set, prefix: str) -> None:
+    """One record per set and method of this run's grid: per seed its accuracy, fit s and latency
+    (None where it failed) and the whole row; `resumed` rows came from an earlier run in --out."""
+    cells = {}
+    for r in rows:   # a later line for the same set, method and seed replaces an earlier one
+        key = (r["set"], r["method"], r["seed"])
+        if key in grid:
+            cells.setdefault(key[:2], {})[r["seed"]] = {**r, "resumed": key in resumed}
+    headline = ("accuracy", "fit_s", "latency_ms", "latency_bulk_ms")
+    for (name, method), by_seed in cells.items():
+        runs = [by_seed[seed] for seed in sorted(by_seed)]
+        record.add(f"{prefix}{name}/{method}",
+                   {"set": name, "method": method, "side": "aeon" if method.startswith("aeon:") else "touchstone",
+                    "threads": 1, "published": PUBLISHED.get(name, {}),
+                    **{key: [r.get(key) for r in runs] for key in headline}, "runs": runs}, seeds=sorted(by_seed))
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--quick", action="store_true", help=f"sets {', '.join(QUICK_SETS)}, methods "
@@ -300,33 +358,11 @@ def main() -> None:
     done = {(r["set"], r["method"], r["seed"]) for r in read_results(results_path)}
     print(f"{len(paths)} sets x {len(methods)} methods, seeds {args.seeds}; results in {results_path}", flush=True)
 
-    def record(row: dict) -> None:
-        with results_path.open("a") as f:
-            f.write(json.dumps(row) + "\n")
-        shown = {k: (round(v, 4) if isinstance(v, float) else v) for k, v in row.items()}
-        print(json.dumps(shown), flush=True)
-
-    for name, path in paths.items():
-        for method in methods:
-            seeds = [s for s in args.seeds if (name, method, s) not in done]
-            if not seeds:
-                continue
-            if method.startswith("aeon:"):
-                if python is None:
-                    continue
-                for row in run_aeon(python, path, method, seeds):
-                    record({"set": name, "method": method, **row})
-                continue
-            net = method in NETS or method.startswith("inceptiontime")
-            for seed in seeds:
-                run_dir = args.out / "runs" / name / method / f"seed{seed}"
-                row = run_touchstone(path, method, seed, run_dir, args.net_limit_min * 60 if net else None)
-                record({"set": name, "method": method, **row})
-                if net and row.get("timeout"):  # one fit beyond the limit: the other seeds are not run
-                    for rest in seeds[seeds.index(seed) + 1:]:
-                        record({"set": name, "method": method, "seed": rest, "load": load_average(),
-                                "error": f"skipped: seed {seed} took more than {args.net_limit_min:.0f} min"})
-                    break
+    with recording("tsc_peers", MEASURED_CODE) as record:
+        run_grid(args, paths, methods, python, done, results_path)
+        grid = {(name, method, seed) for name in paths for method in methods for seed in args.seeds}
+        # --quick is a smoke run (one seed), recorded apart from the results.
+        record_cells(record, read_results(results_path), grid, done, "quick/" if args.quick else "")
     report(read_results(results_path), args.out)
 
 

@@ -1,5 +1,6 @@
 """The peer's side of bench/tsc_peers.py, run by bench/.venv-aeon/bin/python (aeon 1.6.0 and its
-pinned numpy live there, never in the project's venv); it imports nothing of Touchstone.
+pinned numpy live there, never in the project's venv); it imports nothing of Touchstone, so it
+appends nothing to results/ itself: bench/tsc_peers.py records its numbers in results/tsc_peers.jsonl.
 
     python tsc_peers_aeon.py export OUT_DIR NAME [NAME ...]     each set's official TRAIN/TEST files from
                                                                the installed aeon package -> OUT_DIR/NAME.npz

@@ -35,8 +35,12 @@ Every network trains with `trainer=reference` (configs/trainer/reference.yaml) c
 Hydra, with the same epoch budget for all (--epochs, LSTM-FCN's own 2000 replaced by it), on
 a stratified 60/20/20 train/validation/test split; the table gives the epochs run (early
 stopping), the best validation epoch, validation and test accuracy, and the fit time.
+
+Every mode appends its per-seed numbers to results/tsc_reference.jsonl (common/result_records.py);
+--epoch-curve only with the recipe's own budget (no --epochs), the one docs/training_recipes.md shows.
 """
 import argparse
+import json
 import os
 import sys
 import time
@@ -45,6 +49,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
+from common.result_records import recording  # noqa: E402
 from runs.reference_tasks import (  # noqa: E402
     LENGTH,
     MODELS,
@@ -56,14 +61,19 @@ from runs.reference_tasks import (  # noqa: E402
     split,
 )
 
+# What the accuracies and epochs measure: the nets and their training loop, the recipes composed
+# from configs/, and the generated tasks.
+MEASURED_CODE = ["models/", "configs/model/", "configs/trainer/", "runs/reference_tasks.py"]
 
-def batchnorm_check(seeds, n: int = 100, epochs: int = 15) -> None:
+
+def batchnorm_check(seeds, n: int = 100, epochs: int = 15) -> dict:
     """The issue's BatchNorm measurement: PR-CNN with the paper's recipe (trainer=tsc, batch 128 >
     the 60 training series: one optimiser step per epoch), accuracy on its own training windows in
     eval mode vs with batch statistics, without and with the recalibrated statistics."""
     import torch
     print("| recalibrate | seed | steps per epoch | train acc, eval mode | train acc, batch statistics | test acc |")
     print("|---|---|---|---|---|---|")
+    rows = []
     for recalibrate in (False, True):
         for seed in seeds:
             X, y = generate("frequency", n, seed)
@@ -77,62 +87,109 @@ def batchnorm_check(seeds, n: int = 100, epochs: int = 15) -> None:
             model.module_.eval()
             batch_stats = (logits.argmax(1).numpy() == y[train]).mean()
             steps = -(-len(train) // model.batch_size_)
-            print(f"| {recalibrate} | {seed} | {steps} | {eval_mode:.3f} | {batch_stats:.3f} "
-                  f"| {(model.predict(X[test]) == y[test]).mean():.3f} |")
+            test_acc = (model.predict(X[test]) == y[test]).mean()
+            print(f"| {recalibrate} | {seed} | {steps} | {eval_mode:.3f} | {batch_stats:.3f} | {test_acc:.3f} |")
+            rows.append({"recalibrate": recalibrate, "seed": seed, "steps_per_epoch": steps,
+                         "train_accuracy_eval_mode": eval_mode, "train_accuracy_batch_statistics": batch_stats,
+                         "test_accuracy": test_acc})
+    return {"task": "frequency", "model": "prcnn", "trainer": "tsc", "n": n, "epochs": epochs, "rows": rows}
 
 
-def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool, curve_epochs: int) -> None:
-    import json
+def refit_curve(model: str, seed: int, curve_epochs: int, every: int, data) -> list | None:
+    """Test accuracy every `every` epochs of one fit as the refit trains; None for an ensemble."""
+    X, y, X_test, y_test = data
+    estimator = reference_model(model, curve_epochs, seed, ["trainer.epoch_selection=train_loss",
+                                                            "trainer.early_stopping_patience=null"])
+    if estimator.ensemble_size > 1:
+        print(f"{model}: no curve (an ensemble has no network to score until every member is trained; "
+              "its members' curves are --models inceptiontime at seeds seed, seed+1, ...)")
+        return None
+    curve = []
 
+    def logged(record):
+        if record["epoch"] % every == 0:
+            curve.append((record["epoch"], float((estimator.predict(X_test) == y_test).mean())))
+    estimator.fit(X, y, epoch_callback=logged)
+    print(f"{model} seed {seed}, test accuracy of the refit for E epochs: "
+          + " ".join(f"{e}:{a:.3f}" for e, a in curve), flush=True)
+    return curve
+
+
+def recipe_fit(name: str, model: str, seed: int, epochs: int, data) -> dict:
+    """The whole trainer=reference fit: the folds' choice, the refit's test accuracy, fit times;
+    printed in words and as one JSON line, returned with each fold's choice and the pooled accuracy."""
+    from models.fold_epoch_choice import FOLD_CURVE_WINDOW
+    X, y, X_test, y_test = data
+    chosen = reference_model(model, epochs, seed)
+    load_before, start, cpu_start = os.getloadavg()[0], time.perf_counter(), time.process_time()
+    chosen.fit(X, y)
+    fit_s, fit_cpu_s = time.perf_counter() - start, time.process_time() - cpu_start
+    accuracy = float((chosen.predict(X_test) == y_test).mean())
+    # An ensemble (model.ensemble_size > 1): its members' choices, one list each.
+    pooled = None if isinstance(chosen.best_epoch_, list) else chosen.fold_curve_["accuracy"][chosen.best_epoch_ - 1]
+    pooled_text = "" if pooled is None else \
+        f" (pooled held-out accuracy over {FOLD_CURVE_WINDOW} epochs {pooled:.3f})"
+    print(f"{model} seed {seed}, trainer=reference: folds ran {chosen.fold_epochs_run_} epochs, chose "
+          f"{chosen.best_epoch_}{pooled_text}; each fold alone {chosen.fold_best_epochs_}; refit test accuracy "
+          f"{accuracy:.3f}, fit {fit_s:.0f} s wall, {fit_cpu_s:.0f} s CPU, at load "
+          f"{load_before:.1f}-{os.getloadavg()[0]:.1f}", flush=True)
+    row = {"set": name, "model": model, "seed": seed, "test_accuracy": accuracy,
+           "epochs": chosen.best_epoch_, "fold_epochs_run": chosen.fold_epochs_run_,
+           "fit_s": round(fit_s, 1), "fit_cpu_s": round(fit_cpu_s, 1),
+           "load": [round(load_before, 1), round(os.getloadavg()[0], 1)]}
+    print(json.dumps(row), flush=True)
+    return {**row, "fold_best_epochs": chosen.fold_best_epochs_, "pooled_held_out_accuracy": pooled,
+            "pooled_window": FOLD_CURVE_WINDOW}
+
+
+def epoch_curve(path: str, models, seeds, epochs: int, every: int, folds: bool, curve_epochs: int) -> dict:
+    """Per model, its settings and per seed the refit's curve and the recipe's fit (see the docstring)."""
     import numpy as np
 
-    from models.fold_epoch_choice import FOLD_CURVE_WINDOW
     data = np.load(path, allow_pickle=False)   # a user's file: never unpickled
     classes, y_all = np.unique(data["y"], return_inverse=True)
     train, test = data["split"] == "train", data["split"] == "test"
-    X, y, X_test, y_test = data["X"][train], y_all[train], data["X"][test], y_all[test]
-    print(f"{Path(path).stem}: {train.sum()} training / {test.sum()} test recordings, {X.shape[2]} steps, "
+    split_data = data["X"][train], y_all[train], data["X"][test], y_all[test]
+    name = Path(path).stem
+    print(f"{name}: {train.sum()} training / {test.sum()} test recordings, {split_data[0].shape[2]} steps, "
           f"{len(classes)} classes; 1-minute load average {os.getloadavg()[0]:.1f}")
+    settings = {"set": name, "n_train": int(train.sum()), "n_test": int(test.sum()), "steps": split_data[0].shape[2],
+                "classes": len(classes), "epochs": epochs, "curve_epochs": curve_epochs, "every": every}
     results = {}
     for model in models:
+        runs = results.setdefault(model, {**settings, "model": model, "runs": []})["runs"]
         for seed in seeds:
-            if curve_epochs:
-                estimator = reference_model(model, curve_epochs, seed, ["trainer.epoch_selection=train_loss",
-                                                                        "trainer.early_stopping_patience=null"])
-            if curve_epochs and estimator.ensemble_size > 1:
-                print(f"{model}: no curve (an ensemble has no network to score until every member is trained; "
-                      "its members' curves are --models inceptiontime at seeds seed, seed+1, ...)")
-            elif curve_epochs:
-                curve = []
+            curve = refit_curve(model, seed, curve_epochs, every, split_data) if curve_epochs else None
+            recipe = recipe_fit(name, model, seed, epochs, split_data) if folds else None
+            runs.append({"seed": seed, "curve": curve, "recipe": recipe})
+    for model, result in results.items():
+        accuracies = [run["recipe"]["test_accuracy"] for run in result["runs"] if run["recipe"]]
+        if accuracies:
+            print(f"{name} {model}: refit test accuracy {np.mean(accuracies):.3f} +- "
+                  f"{np.std(accuracies, ddof=1 if len(accuracies) > 1 else 0):.3f} over seeds {list(seeds)}", flush=True)
+    return results
 
-                def logged(record, estimator=estimator, curve=curve):
-                    if record["epoch"] % every == 0:
-                        curve.append((record["epoch"], float((estimator.predict(X_test) == y_test).mean())))
-                estimator.fit(X, y, epoch_callback=logged)
-                print(f"{model} seed {seed}, test accuracy of the refit for E epochs: "
-                      + " ".join(f"{e}:{a:.3f}" for e, a in curve), flush=True)
-            if folds:
-                chosen = reference_model(model, epochs, seed)
-                load_before, start, cpu_start = os.getloadavg()[0], time.perf_counter(), time.process_time()
-                chosen.fit(X, y)
-                fit_s, fit_cpu_s = time.perf_counter() - start, time.process_time() - cpu_start
-                accuracy = float((chosen.predict(X_test) == y_test).mean())
-                results.setdefault(model, []).append(accuracy)
-                # An ensemble (model.ensemble_size > 1): its members' choices, one list each.
-                ensemble = isinstance(chosen.best_epoch_, list)
-                pooled = "" if ensemble else \
-                    f" (pooled held-out accuracy over {FOLD_CURVE_WINDOW} epochs {chosen.fold_curve_['accuracy'][chosen.best_epoch_ - 1]:.3f})"
-                print(f"{model} seed {seed}, trainer=reference: folds ran {chosen.fold_epochs_run_} epochs, chose "
-                      f"{chosen.best_epoch_}{pooled}; each fold alone {chosen.fold_best_epochs_}; refit test accuracy "
-                      f"{accuracy:.3f}, fit {fit_s:.0f} s wall, {fit_cpu_s:.0f} s CPU, at load "
-                      f"{load_before:.1f}-{os.getloadavg()[0]:.1f}", flush=True)
-                print(json.dumps({"set": Path(path).stem, "model": model, "seed": seed, "test_accuracy": accuracy,
-                                  "epochs": chosen.best_epoch_, "fold_epochs_run": chosen.fold_epochs_run_,
-                                  "fit_s": round(fit_s, 1), "fit_cpu_s": round(fit_cpu_s, 1),
-                                  "load": [round(load_before, 1), round(os.getloadavg()[0], 1)]}), flush=True)
-    for model, accuracies in results.items():
-        print(f"{Path(path).stem} {model}: refit test accuracy {np.mean(accuracies):.3f} +- {np.std(accuracies, ddof=1 if len(accuracies) > 1 else 0):.3f} "
-              f"over seeds {list(seeds)}", flush=True)
+
+def tasks(args) -> dict:
+    """Every network on every generated task and seed: the table, and its rows with the settings."""
+    args.epochs = args.epochs or 150
+    rows = []
+    for task in args.tasks:
+        for model in args.models:
+            for seed in args.seeds:
+                rows.append(fit_one(task, model, args.epochs, args.n, seed, trainer=args.trainer))
+                r = rows[-1]
+                print(f"{task} {model} seed {seed}: test {r['test_accuracy']:.3f} in {r['fit_s']:.0f} s",
+                      file=sys.stderr)
+    print(f"\ntrainer={args.trainer}, epoch budget {args.epochs}, {args.n} series of {LENGTH} steps per task, "
+          f"optimum {OPTIMUM:.2f}; {os.cpu_count()} cores, OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS', '-')}\n")
+    print("| task | channels | network | seed | batch | epochs run | best epoch | val acc | test acc | optimum | fit (s) |")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    for r in rows:
+        print(f"| {r['task']} | {r['n_channels']} | {r['model']} | {r['seed']} | {r['batch']} | {r['epochs_run']} "
+              f"| {r['best_epoch']} | {r['val_accuracy']:.3f} | {r['test_accuracy']:.3f} | {OPTIMUM:.2f} | {r['fit_s']:.1f} |")
+    return {"trainer": args.trainer, "epochs": args.epochs, "n": args.n, "length": LENGTH, "optimum": OPTIMUM,
+            "rows": rows}
 
 
 def main(argv=None):
@@ -154,27 +211,19 @@ def main(argv=None):
     parser.add_argument("--curve-epochs", type=int, default=300,
                         help="--epoch-curve: the curve's length (every epoch runs); 0: the recipe alone")
     args = parser.parse_args(argv)
-    if args.batchnorm_check:
-        return batchnorm_check(args.seeds)
-    if args.epoch_curve:
-        return epoch_curve(args.epoch_curve, args.models, args.seeds, args.epochs or 1500, args.every,
-                           not args.skip_folds, args.curve_epochs)
-    args.epochs = args.epochs or 150
-    rows = []
-    for task in args.tasks:
-        for model in args.models:
-            for seed in args.seeds:
-                rows.append(fit_one(task, model, args.epochs, args.n, seed, trainer=args.trainer))
-                r = rows[-1]
-                print(f"{task} {model} seed {seed}: test {r['test_accuracy']:.3f} in {r['fit_s']:.0f} s",
-                      file=sys.stderr)
-    print(f"\ntrainer={args.trainer}, epoch budget {args.epochs}, {args.n} series of {LENGTH} steps per task, "
-          f"optimum {OPTIMUM:.2f}; {os.cpu_count()} cores, OMP_NUM_THREADS={os.environ.get('OMP_NUM_THREADS', '-')}\n")
-    print("| task | channels | network | seed | batch | epochs run | best epoch | val acc | test acc | optimum | fit (s) |")
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
-    for r in rows:
-        print(f"| {r['task']} | {r['n_channels']} | {r['model']} | {r['seed']} | {r['batch']} | {r['epochs_run']} "
-              f"| {r['best_epoch']} | {r['val_accuracy']:.3f} | {r['test_accuracy']:.3f} | {OPTIMUM:.2f} | {r['fit_s']:.1f} |")
+    with recording("tsc_reference", MEASURED_CODE) as record:
+        if args.batchnorm_check:
+            record.add("batchnorm_check", batchnorm_check(args.seeds), seeds=args.seeds)
+        elif args.epoch_curve:
+            results = epoch_curve(args.epoch_curve, args.models, args.seeds, args.epochs or 1500, args.every,
+                                  not args.skip_folds, args.curve_epochs)
+            # Another budget than the recipe's own is a check (tests/test_tsc_reference_bench.py runs
+            # one), not the measurement docs/training_recipes.md shows: it prints only.
+            if args.epochs is None:
+                for model, values in results.items():
+                    record.add(f"epoch_curve/{values['set']}/{model}", values, seeds=args.seeds)
+        else:
+            record.add(f"tasks/{args.trainer}", tasks(args), seeds=args.seeds)
 
 
 if __name__ == "__main__":

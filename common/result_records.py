@@ -1,0 +1,248 @@
+"""Result records: every number Touchstone reports about itself, as data with its provenance.
+
+A bench measures, then appends one record per thing it measured to `results/<bench>.jsonl`
+(one JSON object per line, committed with the code). A record carries the raw values (per seed
+or split, not only their mean ± sd) and everything needed to judge them: the exact command, the
+git commit and whether the tree was dirty, the lock's hash, package versions, CPU, cores,
+threads, the 1-minute load average before and after, the date, the seeds, and a hash of each
+source path the bench declares as the code it measures (so the docs can say **stale** when that
+code changes after the measurement). The docs generator (docs/generate.py) reads them back and
+renders every table of measured numbers; nothing else writes these files.
+
+    with recording("default_run", measured_code=["models/", "train.py"]) as record:
+        record.add("scores", {"r2_by_seed": [...]}, seeds=[0, 1, 2])
+
+A line that is not a whole record (truncated, hand-edited, a missing field) is refused with one
+line naming the file and the line: a table is never drawn from half a record.
+"""
+import hashlib
+import json
+import math
+import os
+import platform
+import shlex
+import subprocess
+import sys
+from contextlib import contextmanager
+from datetime import datetime, timezone
+from importlib import metadata
+from pathlib import Path
+
+from common.atomic import atomic_write_text
+
+ROOT = Path(__file__).resolve().parents[1]
+RESULTS = ROOT / "results"
+LOCK = ROOT / "requirements.lock"
+SCHEMA = 1
+# The packages whose versions move numbers; every record names them (the lock pins the rest).
+VERSIONED = ("torch", "numpy", "scikit-learn", "scipy", "onnxruntime", "pandas")
+FIELDS = {"schema": int, "bench": str, "name": str, "values": dict, "seeds": list, "command": str,
+          "commit": str, "dirty": bool, "lock_sha256": str, "measured_code": dict, "versions": dict,
+          "machine": dict, "load_before": float, "load_after": float, "date": str, "duration_s": float}
+CODE_SUFFIXES = {".py", ".yaml", ".yml"}
+# The recorder itself measures nothing: editing it must not make every record under common/ stale.
+NOT_MEASURED = {"common/result_records.py"}
+
+
+class RecordError(ValueError):
+    """A results file or record that cannot be used; the message is one line naming the file."""
+
+
+def file_sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def lock_sha256() -> str:
+    return file_sha256(LOCK) if LOCK.is_file() else "no-lock"
+
+
+def code_sha256(path: str) -> str:
+    """Hash of the source a path names: a file's bytes, or every .py/.yaml file under a folder
+    (names and bytes, sorted), so a record can tell whether the code it measured has changed."""
+    target = ROOT / path
+    if target.is_file():
+        return file_sha256(target)
+    if not target.is_dir():
+        raise RecordError(f"measured code {path!r} does not exist under {ROOT}")
+    digest = hashlib.sha256()
+    for file in sorted(target.rglob("*")):
+        name = file.relative_to(ROOT).as_posix()
+        if file.suffix in CODE_SUFFIXES and "__pycache__" not in file.parts and file.is_file() and name not in NOT_MEASURED:
+            digest.update(name.encode() + b"\0" + file.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def changed_code(record: dict) -> list[str]:
+    """The measured paths whose source differs from what the record measured (empty: current)."""
+    return [path for path, sha in record["measured_code"].items()
+            if not (ROOT / path).exists() or code_sha256(path) != sha]
+
+
+def _git(*args) -> str:
+    done = subprocess.run(["git", *args], cwd=ROOT, capture_output=True, text=True)
+    return done.stdout.strip() if done.returncode == 0 else ""
+
+
+def _cpu_model() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or platform.machine()
+
+
+def _versions() -> dict:
+    versions = {"python": platform.python_version()}
+    for package in VERSIONED:
+        try:
+            versions[package] = metadata.version(package)
+        except metadata.PackageNotFoundError:
+            versions[package] = "absent"
+    return versions
+
+
+def _threads() -> int:
+    """Threads the measured code may use: the bench's own setting, as train.py reads it."""
+    for variable in ("OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+        if os.environ.get(variable, "").isdigit():
+            return int(os.environ[variable])
+    return os.cpu_count() or 1
+
+
+def plain(value):
+    """JSON's own types from numpy's (arrays to lists, scalars to numbers); a non-finite float
+    becomes null, which JSON can hold and NaN it cannot."""
+    if isinstance(value, dict):
+        return {str(key): plain(item) for key, item in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [plain(item) for item in value]
+    if hasattr(value, "tolist"):              # numpy array or scalar
+        return plain(value.tolist())
+    if isinstance(value, float) and not math.isfinite(value):
+        return None
+    return value
+
+
+class Recording:
+    """What one bench run measured; written when the `with` block ends without an error."""
+
+    def __init__(self, bench: str, measured_code: list[str], command: str | None = None):
+        self.bench, self.records = bench, []
+        self.measured_code = {path: code_sha256(path) for path in measured_code}
+        self.command = command or shlex.join(["python", *sys.argv])
+        self.started = datetime.now(timezone.utc)
+        self.load_before = os.getloadavg()[0]
+
+    def add(self, name: str, values: dict, seeds: list | None = None):
+        """One measured thing: `values` holds the raw numbers (per seed or split, as lists)."""
+        self.records.append({"name": name, "values": plain(values), "seeds": plain(list(seeds or []))})
+
+    def finish(self) -> Path:
+        load_after = os.getloadavg()[0]
+        status = _git("status", "--porcelain", "--untracked-files=no")
+        common = {"schema": SCHEMA, "bench": self.bench, "command": self.command,
+                  "commit": _git("rev-parse", "HEAD") or "unknown", "dirty": bool(status),
+                  "lock_sha256": lock_sha256(), "measured_code": self.measured_code, "versions": _versions(),
+                  "machine": {"cpu": _cpu_model(), "cores": os.cpu_count() or 1, "threads": _threads(),
+                              "host": platform.node()},
+                  "load_before": round(self.load_before, 2), "load_after": round(load_after, 2),
+                  "date": self.started.isoformat(timespec="seconds"),
+                  "duration_s": round((datetime.now(timezone.utc) - self.started).total_seconds(), 1)}
+        return append_records(self.bench, [{**common, **record} for record in self.records])
+
+
+@contextmanager
+def recording(bench: str, measured_code: list[str], command: str | None = None):
+    """`with recording(bench, measured_code) as record:` ... `record.add(...)`: appended when the
+    block ends, and only if it ends without an error (a failed bench records nothing)."""
+    record = Recording(bench, measured_code, command)
+    yield record
+    if record.records:
+        path = record.finish()
+        print(f"recorded {len(record.records)} result(s) in {path.relative_to(ROOT)}", flush=True)
+
+
+def append_records(bench: str, records: list[dict], results: Path | None = None) -> Path:
+    """The one writer of results files: the old lines (checked) plus the new, moved into place whole."""
+    path = (results or RESULTS) / f"{bench}.jsonl"
+    old = read_records(path) if path.exists() else []
+    for number, record in enumerate(records, start=1):
+        check_record(record, f"{shown(path)} (new record {number})")
+    # Keys keep the order the bench wrote them in (targets, candidates): tables print in that order.
+    lines = [json.dumps(record, allow_nan=False) for record in old + records]
+    atomic_write_text(path, "\n".join(lines) + "\n")
+    return path
+
+
+def check_record(record, where: str) -> dict:
+    if not isinstance(record, dict):
+        raise RecordError(f"{where}: not a JSON object")
+    missing = [key for key in FIELDS if key not in record]
+    if missing:
+        raise RecordError(f"{where}: missing field(s) {', '.join(missing)}")
+    for key, kind in FIELDS.items():
+        value = record[key]
+        if kind is float and isinstance(value, int) and not isinstance(value, bool):
+            continue
+        if not isinstance(value, kind) or (kind is int and isinstance(value, bool)):
+            raise RecordError(f"{where}: field {key!r} should be {kind.__name__}, got {type(value).__name__}")
+    if record["schema"] != SCHEMA:
+        raise RecordError(f"{where}: schema {record['schema']}, this code reads {SCHEMA}")
+    return record
+
+
+def shown(path: Path) -> str:
+    """A path as a message names it: relative to the repository when it lies inside."""
+    path = Path(path)
+    return str(path.relative_to(ROOT)) if path.is_relative_to(ROOT) else str(path)
+
+
+def read_records(path: Path) -> list[dict]:
+    """Every record of one results file, each checked; the first bad line stops it with its number."""
+    path = Path(path)
+    where = shown(path)
+    if not path.is_file():
+        raise RecordError(f"{where}: no such results file")
+    records = []
+    for number, line in enumerate(path.read_text().splitlines(), start=1):
+        if not line.strip():
+            continue
+        try:
+            record = json.loads(line)
+        except json.JSONDecodeError as error:
+            raise RecordError(f"{where}:{number}: not a whole JSON record ({error.msg})") from None
+        records.append(check_record(record, f"{where}:{number}"))
+    if not records:
+        raise RecordError(f"{where}: holds no record")
+    return records
+
+
+def latest(bench: str, name: str, results: Path | None = None) -> dict:
+    """The newest record called `name` of one bench; refused when it was measured under another lock."""
+    path = (results or RESULTS) / f"{bench}.jsonl"
+    found = [record for record in read_records(path) if record["name"] == name]
+    if not found:
+        raise RecordError(f"{shown(path)}: no record named {name!r}")
+    record = found[-1]
+    if record["lock_sha256"] != lock_sha256():
+        raise RecordError(f"{shown(path)}: record {name!r} was measured under lock {record['lock_sha256'][:12]}, "
+                          f"requirements.lock is now {lock_sha256()[:12]}: re-measure it (make bench)")
+    return record
+
+
+def differences(recorded, fresh, digits: int = 4, where: str = "") -> list[str]:
+    """Where two results differ in the digits a run prints (floats rounded to `digits` decimals;
+    names, counts and nesting exactly): empty when a re-run reproduces a record."""
+    if isinstance(recorded, dict) and isinstance(fresh, dict):
+        keys = sorted(set(recorded) | set(fresh))
+        return [line for key in keys for line in differences(recorded.get(key), fresh.get(key), digits, f"{where}/{key}")]
+    if isinstance(recorded, list) and isinstance(fresh, list) and len(recorded) == len(fresh):
+        return [line for i, (a, b) in enumerate(zip(recorded, fresh))
+                for line in differences(a, b, digits, f"{where}[{i}]")]
+    if isinstance(recorded, float) and isinstance(fresh, float):
+        same = round(recorded, digits) == round(fresh, digits)
+    else:
+        same = recorded == fresh
+    return [] if same else [f"{where or '/'}: recorded {recorded!r}, now {fresh!r}"]

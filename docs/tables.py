@@ -1,0 +1,171 @@
+"""The tables of measured numbers in README.md and docs/*.md, each drawn from result records.
+
+One function per generated block, registered under the block's name; each returns the table's
+markdown and the records it used (docs/generate.py writes their provenance under the table).
+Numbers are formatted here and only here: the same raw values always print the same digits.
+"""
+from common.result_records import RESULTS, RecordError, changed_code, latest, read_records
+from common.spread import format_mean_sd
+
+TABLES = {}
+
+
+def table(name: str, provenance: bool = True):
+    """Register `draw` as the block `name`; `provenance=False` for a table that is itself the
+    provenance (the index of results files), so no line under it repeats it."""
+    def register(draw):
+        draw.provenance = provenance
+        TABLES[name] = draw
+        return draw
+    return register
+
+
+def cell(text) -> str:
+    """A table cell's text: a '|' inside it (|x| for a magnitude) would end the cell."""
+    return str(text).replace("|", "\\|")
+
+
+def seconds(values) -> str:
+    """A duration over runs: mean ± sd in seconds, or milliseconds below one second."""
+    if max(values) < 1:
+        return format_mean_sd([1000 * v for v in values], ".0f") + " ms"
+    return format_mean_sd(values, ".1f") + " s"
+
+
+def seeds_label(seeds) -> str:
+    seeds = list(seeds)
+    if len(seeds) > 2 and seeds == list(range(seeds[0], seeds[-1] + 1)):
+        return f"seeds {seeds[0]}–{seeds[-1]}"
+    return "seed " + ", ".join(map(str, seeds)) if len(seeds) == 1 else "seeds " + ", ".join(map(str, seeds))
+
+
+# ---- the quick tour (bench/quick_tour.py) -------------------------------------------------------
+
+def tour_records() -> list[dict]:
+    """The newest record of each tour command, in the order the bench runs them."""
+    names = []
+    for record in read_records(RESULTS / "quick_tour.jsonl"):
+        if record["name"] != "default_scores" and record["name"] not in names:
+            names.append(record["name"])
+    return [latest("quick_tour", name) for name in names]
+
+
+@table("readme/tour")
+def quick_tour():
+    records = tour_records()
+    lines = ["| command | what it does | wall time | CPU time |", "|---|---|---|---|"]
+    for record in records:
+        values = record["values"]
+        lines.append(f"| `{values['command']}` | {values['what']} | {seconds(values['wall_s'])} | "
+                     f"{seconds(values['cpu_s'])} |")
+    n = sorted({len(record["seeds"]) for record in records})
+    note = (f"Mean ± sd over {', '.join(map(str, n))} runs (train commands: `seed=` each of the record's seeds), "
+            "one command at a time; wall time is the whole command, CPU time user + sys.")
+    return "\n".join(lines) + "\n\n" + note, records
+
+
+# ---- the default run's scores (bench/quick_tour.py) ----------------------------------------------
+
+@table("default_run/scores")
+def default_run_scores():
+    record = latest("quick_tour", "default_scores")
+    by_seed = record["values"]["by_seed"]
+    targets = [t for t in by_seed[0]["test_r2_over_splits"] if t != "average"]
+    splits = by_seed[0]["n_splits"]
+    lines = ["| seed | chosen on validation | validation R² of each candidate | "
+             + " | ".join(f"test R² {t}" for t in targets) + " | test R² averaged over targets |",
+             "|---" * (4 + len(targets)) + "|"]
+    for seed, scores in zip(record["seeds"], by_seed):
+        validation = ", ".join(f"{name} {r2:.4f}" for name, r2 in scores["validation_r2"].items())
+        spreads = [scores["test_r2_over_splits"][t] for t in [*targets, "average"]]
+        lines.append(f"| {seed} | {scores['chosen']} | {validation} | "
+                     + " | ".join(f"{s['mean']:.3f} ± {s['sd']:.3f}" for s in spreads) + " |")
+    averages = [scores["test_r2_over_splits"]["average"]["mean"] for scores in by_seed]
+    note = (f"Each row is one `python train.py seed=<s>`; a test cell is the mean ± sd over the run's {splits} "
+            f"grouped splits, the chosen model refitted on each. Across {seeds_label(record['seeds'])} the "
+            f"averaged test R² is {format_mean_sd(averages, '.3f')}.")
+    return "\n".join(lines) + "\n\n" + note, [record]
+
+
+# ---- fidelity rows (bench/fidelity.py) -----------------------------------------------------------
+
+FIDELITY_SCENES = ("rubber12", "fingertip", "capacitive6x6", "ert", "taxels")
+VERDICT = {True: "holds", False: "does not hold", None: "not measured"}
+
+
+def fidelity_rows(scene: str) -> list[dict]:
+    """The newest record of each of the scene's rows, in row order."""
+    names = []
+    for record in read_records(RESULTS / "fidelity.jsonl"):
+        if record["name"].startswith(f"{scene}/") and record["name"] not in names:
+            names.append(record["name"])
+    if not names:
+        raise RecordError(f"{RESULTS / 'fidelity.jsonl'}: no rows of scene {scene!r}")
+    return [latest("fidelity", name) for name in names]
+
+
+def fidelity_table(scene: str):
+    records = fidelity_rows(scene)
+    lines = ["| # | paper's observation | paper's number | scene's measurement | tolerance | verdict |",
+             "|---|---|---|---|---|---|"]
+    for record in records:
+        row = record["values"]
+        cells = [row["number"], row["statement"], row["paper"], row["value"], row["tolerance"] or "—",
+                 VERDICT[row["holds"]]]
+        lines.append("| " + " | ".join(map(cell, cells)) + " |")
+    held = sum(record["values"]["holds"] is True for record in records)
+    return f"**{held} of {len(records)} rows hold** (`scene={records[0]['values']['config']}`)\n\n" + "\n".join(lines), records
+
+
+for _scene in FIDELITY_SCENES:
+    table(f"fidelity/{_scene}")(lambda scene=_scene: fidelity_table(scene))
+
+
+@table("fidelity/summary")
+def fidelity_summary():
+    lines = ["| scene | rows that hold | that do not hold | not measured |", "|---|---|---|---|"]
+    used, held_all, total = [], 0, 0
+    for scene in FIDELITY_SCENES:
+        records = fidelity_rows(scene)
+        used += records
+        by_verdict = {verdict: [r["values"]["number"] for r in records if r["values"]["holds"] is verdict]
+                      for verdict in (True, False, None)}
+        lines.append(f"| {scene} ({len(by_verdict[True])} of {len(records)}) | {', '.join(by_verdict[True]) or '—'} | "
+                     f"{', '.join(by_verdict[False]) or '—'} | {', '.join(by_verdict[None]) or '—'} |")
+        held_all, total = held_all + len(by_verdict[True]), total + len(records)
+    return f"**{held_all} of {total} rows hold.**\n\n" + "\n".join(lines), used
+
+
+# ---- contact tracking speed (bench/contacts.py) --------------------------------------------------
+
+@table("contacts/timing")
+def contacts_timing():
+    record = latest("contacts", "timing")
+    values = record["values"]
+    lines = ["| stream | tracker | contacts per frame | p50 per frame (µs) | p99 per frame (µs) |",
+             "|---|---|---|---|---|"]
+    for row in values["rows"]:
+        lines.append(f"| {row['stream']} | {row['tracker']} | {row['contacts_per_frame']:.1f} | "
+                     f"{format_mean_sd(row['p50_us'], '.1f')} | {format_mean_sd(row['p99_us'], '.1f')} |")
+    note = (f"Scene `{values['scene']}`; mean ± sd over {len(values['rows'][0]['p50_us'])} timed runs per row "
+            "(one thread, trackers alternating run by run after a warm-up run each).")
+    return "\n".join(lines) + "\n\n" + note, [record]
+
+
+# ---- what is recorded (every results/*.jsonl) ----------------------------------------------------
+
+@table("results/index", provenance=False)
+def results_index():
+    """Each bench's newest run: when, what it cost, and whether the code it measured has moved."""
+    lines = ["| results file | records | newest run | its duration | commit | state |", "|---|---|---|---|---|---|"]
+    used = []
+    for path in sorted(RESULTS.glob("*.jsonl")):
+        records = read_records(path)
+        newest = records[-1]
+        run = [r for r in records if (r["date"], r["command"]) == (newest["date"], newest["command"])]
+        stale = sorted({p for r in run for p in changed_code(r)})
+        used += run
+        lines.append(f"| `results/{path.name}` | {len(records)} | `{newest['command']}`, {newest['date'][:10]} | "
+                     f"{newest['duration_s'] / 60:.1f} min | {newest['commit'][:9]}{'+dirty' if newest['dirty'] else ''} | "
+                     f"{'**stale**: ' + ', '.join(stale) + ' changed' if stale else 'current'} |")
+    return "\n".join(lines), used
