@@ -33,16 +33,51 @@ docs: install                 ## render every generated table of README.md and d
 docs-check: install           ## exit 1 if a generated table differs from what results/ renders
 	$(PY) docs/generate.py --check
 
-bench-quick: install          ## re-measure the headline numbers into results/, then re-render the docs
-	CI=true $(PY) bench/quick_tour.py --quick
-	CI=true OMP_NUM_THREADS=1 $(PY) bench/contacts.py --runs 3
-	CI=true $(PY) bench/fidelity.py --scene all
+# Each bench appends its records to results/<bench>.jsonl; docs/results.md lists what each one
+# last cost (its records' duration). One thread per process, as train.py's default.
+BENCH_ENV := CI=true OMP_NUM_THREADS=1
+BENCH_TMP ?= /tmp/touchstone-bench
+
+bench-quick: install          ## the headline numbers (tour, contact loop, fidelity, recordings vs aeon on two sets), then the docs
+	$(BENCH_ENV) $(PY) bench/quick_tour.py --quick
+	$(BENCH_ENV) $(PY) bench/contacts.py --runs 3
+	$(BENCH_ENV) $(PY) bench/fidelity.py --scene all
+	$(BENCH_ENV) $(PY) bench/tsc_peers.py --quick --out $(BENCH_TMP)/tsc_peers_quick
 	$(PY) docs/generate.py
 
-bench: install                ## every bench that records results (hours: see docs/layout.md), then the docs
-	CI=true $(PY) bench/quick_tour.py
-	CI=true OMP_NUM_THREADS=1 $(PY) bench/contacts.py
-	CI=true $(PY) bench/fidelity.py --scene all
+bench: install                ## every bench that records (many hours on 2 cores), then the docs
+	rm -rf $(BENCH_TMP) && mkdir -p $(BENCH_TMP)
+	$(BENCH_ENV) $(PY) bench/quick_tour.py
+	$(BENCH_ENV) $(PY) bench/contacts.py
+	$(BENCH_ENV) $(PY) bench/fidelity.py --scene all
+	$(BENCH_ENV) $(PY) bench/scenes.py
+	$(BENCH_ENV) $(PY) bench/latency.py
+	$(BENCH_ENV) $(PY) bench/threads.py
+	$(BENCH_ENV) $(PY) bench/large_table.py
+	$(BENCH_ENV) $(PY) train.py seed=0 hydra.run.dir=$(BENCH_TMP)/default_run
+	$(BENCH_ENV) $(PY) bench/fitted_state.py $(BENCH_TMP)/default_run
+	$(BENCH_ENV) $(PY) bench/blend_weights.py
+	$(BENCH_ENV) $(PY) bench/blend_resampling.py
+	$(BENCH_ENV) $(PY) bench/kfold_variance.py
+	$(BENCH_ENV) $(PY) bench/feature_ablation.py
+	$(BENCH_ENV) $(PY) bench/rubber12_repeat_variation.py
+	$(BENCH_ENV) $(PY) train.py -m experiment=capacitive_force hydra.sweep.dir=$(BENCH_TMP)/capacitive_force
+	$(BENCH_ENV) $(PY) bench/capacitive_force.py $(BENCH_TMP)/capacitive_force
+	$(BENCH_ENV) $(PY) bench/capacitive_gp.py
+	$(BENCH_ENV) $(PY) bench/taxels.py
+	$(BENCH_ENV) $(PY) bench/taxels.py --covers
+	$(BENCH_ENV) $(PY) bench/taxel_shear_candidates.py
+	$(BENCH_ENV) $(PY) bench/ert.py
+	$(BENCH_ENV) $(PY) bench/ert_localisation_floor.py
+	$(BENCH_ENV) $(PY) bench/ert_vs_pyeit.py
+	$(BENCH_ENV) $(PY) bench/ert_learned_validation.py
+	$(BENCH_ENV) $(PY) bench/textile_layout_physics.py
+	$(BENCH_ENV) $(PY) bench/tsc_reference.py
+	$(BENCH_ENV) $(PY) bench/tsc_peers.py --out $(BENCH_TMP)/tsc_peers
+	$(BENCH_ENV) $(PY) bench/rocket_parity.py
+	$(BENCH_ENV) $(PY) bench/onnx_ppv_floor.py
+	$(BENCH_ENV) $(PY) bench/search_scaling.py
+	$(BENCH_ENV) $(PY) bench/ddp_step_time.py --repeats 3
 	$(PY) docs/generate.py
 
 clean:
