@@ -42,7 +42,8 @@ bench-quick: install          ## the headline numbers (tour, contact loop, fidel
 	$(BENCH_ENV) $(PY) bench/quick_tour.py --quick
 	$(BENCH_ENV) $(PY) bench/contacts.py --runs 3
 	$(BENCH_ENV) $(PY) bench/fidelity.py --scene all
-	$(BENCH_ENV) $(PY) bench/tsc_peers.py --quick --out $(BENCH_TMP)/tsc_peers_quick
+	$(BENCH_ENV) $(PY) bench/tsc_peers.py --sets GunPoint BasicMotions --methods aeon:minirocket minirocket \
+	  --seeds 0 1 2 --out $(BENCH_TMP)/tsc_peers_two_sets
 	$(PY) docs/generate.py
 
 bench: install                ## every bench that records (many hours on 2 cores), then the docs

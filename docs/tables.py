@@ -169,3 +169,34 @@ def results_index():
                      f"{newest['duration_s'] / 60:.1f} min | {newest['commit'][:9]}{'+dirty' if newest['dirty'] else ''} | "
                      f"{'**stale**: ' + ', '.join(stale) + ' changed' if stale else 'current'} |")
     return "\n".join(lines), used
+
+
+# ---- recordings against aeon (bench/tsc_peers.py) -------------------------------------------------
+
+def spread_or_missing(values, spec: str) -> str:
+    """mean ± sd over the seeds that ran; a seed that failed (null) is counted and said."""
+    ran = [v for v in values if v is not None]
+    if not ran:
+        return "failed"
+    text = format_mean_sd(ran, spec) if len(ran) > 1 else f"{ran[0]:{spec}} (one seed)"
+    return text + (f" ({len(values) - len(ran)} failed)" if len(ran) < len(values) else "")
+
+
+@table("tsc_peers/two_sets")
+def tsc_peers_two_sets():
+    """The bench-quick comparison: the same MiniRocket on the same official splits, ours and aeon's."""
+    names = []
+    for record in read_records(RESULTS / "tsc_peers.jsonl"):
+        if not record["name"].startswith("quick/") and record["name"] not in names:
+            names.append(record["name"])
+    records = [latest("tsc_peers", name) for name in names]
+    lines = ["| set | method | side | test accuracy | fit (s) | latency per recording (ms) | seeds |",
+             "|---|---|---|---|---|---|---|"]
+    for record in sorted(records, key=lambda r: (r["values"]["set"], r["values"]["method"])):
+        values = record["values"]
+        lines.append(f"| {values['set']} | `{values['method']}` | {values['side']} | "
+                     f"{spread_or_missing(values['accuracy'], '.4f')} | {spread_or_missing(values['fit_s'], '.2f')} | "
+                     f"{spread_or_missing(values['latency_ms'], '.2f')} | {seeds_label(record['seeds'])} |")
+    note = ("Official train/test splits of the sets aeon's wheel ships; one thread; fit is the fit alone; latency is "
+            "one recording at a time (Touchstone: onnxruntime p50; aeon: median of single-recording predict calls).")
+    return "\n".join(lines) + "\n\n" + note, records
