@@ -95,16 +95,7 @@ def model_inputs(predictor: OnnxPredictor) -> str:
                      f"{predictor.window_steps} steps{span}")
     else:
         lines.append("  input: a table with one row per press and these channel columns")
-    if predictor.kind == "regression":
-        bounds = len(predictor.outputs) > 1
-        lines.append("  output: " + ", ".join(_with_unit(t) for t in predictor.targets)
-                     + (", each with _lower95 and _upper95" if bounds else ""))
-    else:
-        label = predictor.metadata.get("label")  # the target column a table classifier was trained on
-        lines.append(f"  classes{f' of {label!r}' if label else ''} ({len(predictor.classes)}): "
-                     f"{', '.join(predictor.classes)}")
-        lines.append("  output: " + ("recording (when the input names them), start_step, " if predictor.reads_windows
-                                     else "") + "predicted, " + ", ".join(f"p_{c}" for c in predictor.classes))
+    lines += predictor.reads.outputs(predictor, _with_unit)
     return "\n".join(lines)
 
 

@@ -31,9 +31,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from common.result_records import recording  # noqa: E402
+from common.spread import format_mean_sd  # noqa: E402
 from common.threads import apply_threads, configured_threads  # noqa: E402
 from runs.fidelity import capacitive6x6 as rows  # noqa: E402
-from runs.fidelity.observations import mean_sd, scene_params  # noqa: E402
+from runs.fidelity.observations import scene_params  # noqa: E402
 
 NOISE_TERM_N2 = 1e-3
 # What the table measures: the paper-configured GP, its split and per-cell fit (runs/fidelity), and
@@ -79,7 +80,7 @@ def print_table(results: dict, seeds: int):
           f"{os.getloadavg()[0]:.1f})\n")
     print("| reading | " + " | ".join(keys) + " |\n|---|" + "---|" * len(keys))
     for name, values in results.items():
-        print(f"| {name} | " + " | ".join(mean_sd(values[k], 4) for k in keys) + " |")
+        print(f"| {name} | " + " | ".join(format_mean_sd(values[k], ".4f") for k in keys) + " |")
 
 
 def main(argv=None):

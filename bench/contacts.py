@@ -43,6 +43,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from common.result_records import recording  # noqa: E402
+from common.spread import format_mean_sd  # noqa: E402
 from models.contact_tracking.force import force_reader  # noqa: E402
 from models.contact_tracking.timing import latency_summary, timed_updates  # noqa: E402
 from runs.studies.capacitive_tracking import fit_force_pipeline, make_tracker  # noqa: E402
@@ -107,8 +108,8 @@ def measure(args) -> list[dict]:
                     runs[name].append(figures)
         for name in names:
             p50, p99, found = np.array(runs[name]).T
-            print(f"| {stream_name} | {name} | {found[0]:.1f} | {p50.mean():.1f} ± {p50.std(ddof=1):.1f} | "
-                  f"{p99.mean():.1f} ± {p99.std(ddof=1):.1f} |", flush=True)
+            print(f"| {stream_name} | {name} | {found[0]:.1f} | {format_mean_sd(p50, '.1f')} | "
+                  f"{format_mean_sd(p99, '.1f')} |", flush=True)
             rows.append({"stream": stream_name, "tracker": name, "contacts_per_frame": found[0],
                          "p50_us": p50, "p99_us": p99})
     print(f"\n{args.runs} runs each (mean ± sd of the per-run figures); load average at end: "

@@ -65,10 +65,6 @@ def cases(epochs: int, dropout: bool):
             network=functools.partial(LSTMFCN, hidden=32, widths=(32, 32, 32), dropout=0.8), seed=seed, **tsc)
 
 
-def mean_sd(values) -> str:
-    return format_mean_sd(values, ".1f")
-
-
 def case_rows(name: str, per_rank: bool, runs: dict, test) -> list[dict]:
     """Print one net's rows (1 and 2 processes); return their raw numbers, one entry per repeat."""
     rows = []
@@ -82,8 +78,9 @@ def case_rows(name: str, per_rank: bool, runs: dict, test) -> list[dict]:
         identical = None if per_rank else all(f.step_losses_ == fitted[0].step_losses_ for f in fitted)
         accuracy = [100 * float((f.predict(test[0]) == test[1]).mean()) for f in fitted] if test is not None else None
         difference = "— (dropout per rank)" if per_rank else f"{max(differences):.1e}"
-        print(f"| {name} | {n} | {steps} | {mean_sd(step_ms)} | {difference} | "
-              f"{'—' if per_rank else identical} | {mean_sd(accuracy) + ' %' if accuracy is not None else '—'} |")
+        print(f"| {name} | {n} | {steps} | {format_mean_sd(step_ms, '.1f')} | {difference} | "
+              f"{'—' if per_rank else identical} | "
+              f"{format_mean_sd(accuracy, '.1f') + ' %' if accuracy is not None else '—'} |")
         rows.append({"processes": n, "steps": steps, "step_ms": step_ms,
                      "max_abs_loss_difference": differences, "repeats_identical": identical,
                      "test_accuracy_pct": accuracy})

@@ -13,7 +13,7 @@ CPU time (what one core all its own would give when other jobs share the machine
 memory contention still count).
 Jacobian: TikhonovReconstruction.jacobian() from scratch (the electrode potentials by one sparse
 LU, the adjoint sensitivities, the four-terminal map), mean +- sd of --repeats, and the
-sensitivity of the transfer matrix's 276 unique entries alone (models/ert/readings.py, what
+sensitivity of the transfer matrix's 276 unique entries alone (data/ert/jacobian.py, what
 Gauss-Newton uses).
 Reconstruction: onnxruntime, batch 1, one thread, median of --calls calls, for Tikhonov,
 Gauss-Newton (20 x 20 pixels) and GREIT (48 x 48); the fits use a small calibration (its size
@@ -37,18 +37,18 @@ sys.path.insert(0, str(ROOT))
 
 from common.result_records import recording  # noqa: E402
 from common.spread import format_mean_sd
-from data.scenes import ert
+from data.ert.forward import sheet_solver
+from data.ert.jacobian import pixel_sensitivity
 from export.reconstruction_graphs import linear_image_to_onnx, tikhonov_to_onnx
 from models.ert.gauss_newton import GaussNewtonReconstruction
 from models.ert.greit import GreitReconstruction
-from models.ert.readings import pixel_sensitivity
-from models.tikhonov_reconstruction import TikhonovReconstruction
+from models.ert.tikhonov import TikhonovReconstruction
 
 # What the three parts time: the scene, its effects and its sheet solver (simulation), the
 # sensitivities (jacobian), the reconstructions and their graphs (onnx), and the scenes' configs.
 MEASURED_CODE = ["data/scenes/ert.py", "data/scenes/ert_effects.py", "data/physics/sheet_conduction.py",
                  "data/physics/press_update.py", "data/physics/textile_contact.py", "models/ert/",
-                 "models/tikhonov_reconstruction.py", "export/reconstruction_graphs.py", "configs/scene/"]
+                 "data/ert/", "export/reconstruction_graphs.py", "configs/scene/"]
 
 
 def scene_node(name: str, **overrides) -> dict:
@@ -61,13 +61,14 @@ def scene(name: str, **overrides):
     return instantiate(scene_node(name, **overrides))
 
 
-def mean_sd(values) -> str:
-    return format_mean_sd(values, ".2f" if np.mean(values) < 10 else ".0f", " +- ")
+def magnitude_spec(mean: float) -> str:
+    """Two decimals below 10, none from 10 up: seconds stay small, frames per second run to thousands."""
+    return ".2f" if mean < 10 else ".0f"
 
 
 def simulation(s, frames: int, repeats: int) -> dict:
     """The press solver's one-off build (s), then frames/s of whole generate() calls, wall and per CPU-s."""
-    ert.sheet_solver.cache_clear()
+    sheet_solver.cache_clear()
     start = time.perf_counter()
     s.transfer_resistance(np.zeros((1, 1, 3)))        # the first press builds the dense inverse
     build = time.perf_counter() - start
@@ -133,10 +134,12 @@ def row_cells(measured: dict) -> list[str]:
     if "simulation" in measured:
         sim = measured["simulation"]
         cells.update(build=f"{sim['solver_build_s']:.2f}",
-                     fps=f"{mean_sd(sim['frames_per_s'])} ({mean_sd(sim['frames_per_cpu_s'])} per CPU-s)")
+                     fps=f"{format_mean_sd(sim['frames_per_s'], magnitude_spec, ' +- ')} "
+                         f"({format_mean_sd(sim['frames_per_cpu_s'], magnitude_spec, ' +- ')} per CPU-s)")
     if "jacobian" in measured:
         jac = measured["jacobian"]
-        cells.update(jacobian=f"{mean_sd(jac['jacobian_s'])} ({jac['jacobian_shape'][0]} x {jac['jacobian_shape'][1]})",
+        cells.update(jacobian=f"{format_mean_sd(jac['jacobian_s'], magnitude_spec, ' +- ')} "
+                              f"({jac['jacobian_shape'][0]} x {jac['jacobian_shape'][1]})",
                      via_z=f"{jac['via_z_s']:.2f}")
     if "onnx" in measured:
         cells.update({method: f"{ms:.3f}" for method, ms in measured["onnx"]["p50_ms"].items()})

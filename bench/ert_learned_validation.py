@@ -44,7 +44,7 @@ TEST_SEEDS = (0, 1, 2)    # the bench's sensors: never a validation sensor
 # that fits it, and the scene that simulates its training and validation sensors.
 MEASURED_CODE = ["models/ert/", "runs/studies/ert_tests.py", "data/scenes/ert.py", "data/scenes/ert_effects.py",
                  "data/physics/sheet_conduction.py", "data/physics/press_update.py", "data/physics/textile_contact.py",
-                 "configs/scene/"]
+                 "data/ert/", "configs/scene/"]
 
 
 def parsed_setting(text: str) -> tuple[str, object]:

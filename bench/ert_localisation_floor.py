@@ -10,7 +10,7 @@ presses at 4 and 10 N (the bench's test recording, bench/ert_vs_pyeit.py):
 
 - the mean frame mu(x, y, F) is the scene's deterministic chain (ERTScene.transfer_resistance with
   the random press effect, hysteresis, left out), in the 276 unique transfer resistances dz
-  (models/ert/readings.py: channels = K dz; u = K^T v is sufficient, so nothing is lost);
+  (data/ert/readings.py: channels = K dz; u = K^T v is sufficient, so nothing is lost);
   d mu / d(x, y, F) by central differences (`--step-mm`, force step `--step-relative`);
 - the frame's noise, each term read off the effect that makes it (data/scenes/ert_effects.py):
   adc noise on the frame and on the recording's unloaded frame (2 sigma^2 per channel; the
@@ -55,8 +55,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from common.result_records import recording  # noqa: E402
-from data.scenes.ert import ERTScene, patch_loads_n  # noqa: E402
-from models.ert.readings import transfer_basis, unique_transfer_entries  # noqa: E402
+from common.spread import format_mean_sd  # noqa: E402
+from data.ert.patch_loads import patch_loads_n  # noqa: E402
+from data.ert.readings import transfer_basis, unique_transfer_entries  # noqa: E402
+from data.scenes.ert import ERTScene  # noqa: E402
 
 RANDOM_PRESS_EFFECTS = ("hysteresis", "viscoelastic_hysteresis")
 # reading effects, left out of the mean frame; the noise model has adc noise and baseline drift only
@@ -66,7 +68,7 @@ BOUNDS = ("adc", "adc_drift", "unknown_sensitivity")
 # What the bound is computed from: the scene's forward model and effects (and their configs), the
 # transfer-resistance basis, and this file, where the Fisher information itself is worked out.
 MEASURED_CODE = ["data/scenes/ert.py", "data/scenes/ert_effects.py", "data/physics/sheet_conduction.py",
-                 "data/physics/press_update.py", "data/physics/textile_contact.py", "models/ert/readings.py",
+                 "data/physics/press_update.py", "data/physics/textile_contact.py", "data/ert/",
                  "configs/scene/", "bench/ert_localisation_floor.py"]
 
 
@@ -303,16 +305,11 @@ def print_table(cells):
           + f" | {last}, uninformed axes exact (mm) | {last}, median press (mm) | presses uninformed on one axis |")
     print("|---|---|---|" + "---|" * (len(BOUNDS) + 3))
     for cell in cells:
-        texts = [mean_sd_cell(cell["mean_mm_per_seed"][bound]) for bound in BOUNDS]
-        texts.append(mean_sd_cell(cell["optimistic_mm_per_seed"][last]))
+        texts = [format_mean_sd(cell["mean_mm_per_seed"][bound]) for bound in BOUNDS]
+        texts.append(format_mean_sd(cell["optimistic_mm_per_seed"][last]))
         texts.append(f"{cell['median_press_mm'][last]:.2f}")
         texts.append(f"{np.mean(cell['uninformed_per_seed'][last]):.1f} of {cell['presses_per_sensor']}")
         print(f"| {cell['layout']} | {cell['noise_v']:g} | {cell['force_n']:g} | " + " | ".join(texts) + " |")
-
-
-def mean_sd_cell(per_seed) -> str:
-    sd = np.std(per_seed, ddof=1) if len(per_seed) > 1 else 0.0
-    return f"{np.mean(per_seed):.2f} ± {sd:.2f}"
 
 
 if __name__ == "__main__":

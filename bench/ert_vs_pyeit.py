@@ -26,7 +26,7 @@ lambda and both read-outs (the arg-max element / pixel, or the thresholded centr
 Touchstone's voltage is V_c - V_{c+1} for current into a; pyEIT's is v_{m+1} - v_m, so the
 frames enter pyEIT negated (same channel order).
 
-Touchstone: `tikhonov` (calibrated, models/tikhonov_reconstruction.py), `gauss_newton`
+Touchstone: `tikhonov` (calibrated, models/ert/tikhonov.py), `gauss_newton`
 (models/ert/gauss_newton.py: prior, lambda, threshold chosen), `greit` (models/ert/greit.py:
 trained on presses of 4 other simulated sensors at the run's noise), `greit_learned`
 (models/ert/learned_inverse.py: extra trees on GREIT's image, trained on the same other
@@ -59,9 +59,10 @@ sys.path.insert(0, str(ROOT))
 
 # the module, not its `recording`: here a recording is a sensor's (calibration, single_point)
 from common import result_records  # noqa: E402
-from data.scenes.ert import injection_pairs  # noqa: E402
+from data.ert.protocol import injection_pairs  # noqa: E402
 from models.ert.image_readout import thresholded_centroid  # noqa: E402
-from runs.studies.ert_tests import RECONSTRUCTIONS, fit_reconstruction, chosen_hyperparameters  # noqa: E402
+from models.ert.registry import RECONSTRUCTIONS  # noqa: E402
+from runs.studies.ert_tests import fit_reconstruction  # noqa: E402
 
 THRESHOLDS = (0.3, 0.5, 0.7)
 PYEIT_LAMBDAS = (1e-3, 1e-2, 1e-1)
@@ -70,7 +71,7 @@ PYEIT_LAMBDAS = (1e-3, 1e-2, 1e-1)
 # version is in each record's values.
 MEASURED_CODE = ["data/scenes/ert.py", "data/scenes/ert_effects.py", "data/physics/sheet_conduction.py",
                  "data/physics/press_update.py", "data/physics/textile_contact.py", "models/ert/",
-                 "models/tikhonov_reconstruction.py", "runs/studies/ert_tests.py", "configs/scene/"]
+                 "data/ert/", "runs/studies/ert_tests.py", "configs/scene/"]
 
 
 def scene_cfg(layout: str, noise_v: float, overrides=()):
@@ -174,7 +175,7 @@ class Touchstone:
         return self.model.predict(frames)[:, :2]
 
     def chosen(self):
-        return chosen_hyperparameters(self.model)
+        return self.model.chosen_hyperparameters()
 
 
 def per_frame_ms(method, frames, calls=200):

@@ -27,9 +27,10 @@ sys.path.insert(0, str(ROOT))
 import numpy as np  # noqa: E402
 
 from common.result_records import recording  # noqa: E402
+from common.spread import format_mean_sd  # noqa: E402
 from common.threads import apply_threads, configured_threads  # noqa: E402
 from runs.fidelity.observations import (  # noqa: E402
-    SEEDS, CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, mean_sd, run_checks, scene_params,
+    SEEDS, CHECKS, CONFIGS, SCENE_MODULES, load_scene, make_probe, markdown, run_checks, scene_params,
     seeds_label)
 from runs.fidelity.rubber12 import (  # noqa: E402
     SceneProbe,
@@ -62,11 +63,11 @@ def compare_patterns(config: str, overrides, repeats: int) -> str:
         four, five = corners_least_sensitive(probe).numbers["by_seed"], centre_widest_range(probe).numbers["by_seed"]
         six = mirror_ambiguity_worst_at_edges(probe).numbers["by_seed"]
         r2 = np.array(extra_trees_r2(probe).numbers["by_seed"])
-        sensitivity = " / ".join(mean_sd(100 * np.array(four[k])) for k in ("corner_mean", "edge_mean", "centre"))
+        sensitivity = " / ".join(format_mean_sd(100 * np.array(four[k])) for k in ("corner_mean", "edge_mean", "centre"))
         p5_share = np.array(five["range"])[:, 4] / np.max(five["range"], axis=1)
-        lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {sensitivity} % | {mean_sd(p5_share)} | "
-                     f"{mean_sd(six['edge'], 3)} / {mean_sd(six['centre'], 3)} | "
-                     f"{mean_sd(r2[:, 0], 3)}, {mean_sd(r2[:, 1], 3)} | "
+        lines.append(f"| {name} | {probe.curves[0].shape[-1]} | {sensitivity} % | {format_mean_sd(p5_share)} | "
+                     f"{format_mean_sd(six['edge'], '.3f')} / {format_mean_sd(six['centre'], '.3f')} | "
+                     f"{format_mean_sd(r2[:, 0], '.3f')}, {format_mean_sd(r2[:, 1], '.3f')} | "
                      f"{_random_press_r2(params, pattern)} |")
     return "\n".join(lines)
 
@@ -82,7 +83,7 @@ def _random_press_r2(params, pattern) -> str:
         probe = SceneProbe({**params, "measurement": pattern, "seed": seed})
         table = probe.scene(n_samples=RANDOM_PRESSES, protocol="random").generate()
         scores.append(hold_out_r2(compute_features(table.channels, FEATURE_GROUPS), table.targets, seed)[:3])
-    return " / ".join(mean_sd(column, 3) for column in np.array(scores).T)
+    return " / ".join(format_mean_sd(column, ".3f") for column in np.array(scores).T)
 
 
 # What a fidelity row measures: the scenes, the checks and the models some rows train.

@@ -136,25 +136,22 @@ def touchstone_rows(data, member, seeds, clock=time.perf_counter) -> list[dict]:
     return rows
 
 
-def spread(rows, key, digits=3) -> str:
-    return format_mean_sd([r[key] for r in rows], f".{digits}f")
-
-
 def print_table(results: dict, shapes: dict, sets: list):
     print("\n| set | length x channels | method | accuracy | fit s | latency ms per recording | features | "
           "ONNX-eager max gap | load average |")
     print("|---|---|---|---|---|---|---|---|---|")
     for key in sorted(results, key=lambda k: (sets.index(k.split("|")[0]), k)):
         rows, (name, method) = results[key], key.split("|")
-        line = (f"| {name} | {shapes[name][0]} x {shapes[name][1]} | {method} | {spread(rows, 'accuracy')} | "
-                f"{spread(rows, 'fit_s', 2)} | ")
+        seeds = {k: [r[k] for r in rows] for k in rows[0]}   # each measurement over the seeds
+        line = (f"| {name} | {shapes[name][0]} x {shapes[name][1]} | {method} | "
+                f"{format_mean_sd(seeds['accuracy'], '.3f')} | {format_mean_sd(seeds['fit_s'])} | ")
         if method.startswith("Touchstone"):
-            print(line + f"{spread(rows, 'latency_ms', 2)} (ONNX, one call) | {rows[0]['n_features']} | "
+            print(line + f"{format_mean_sd(seeds['latency_ms'])} (ONNX, one call) | {rows[0]['n_features']} | "
                   f"{max(r['onnx_eager_max_abs'] for r in rows):.1e} | "
                   f"{np.mean([r['load_average'] for r in rows]):.1f} |")
         else:
-            print(line + f"{spread(rows, 'batch_share_ms', 2)} (batch share) / {spread(rows, 'latency_ms', 2)} "
-                  "(one call) | | | |")
+            print(line + f"{format_mean_sd(seeds['batch_share_ms'])} (batch share) / "
+                  f"{format_mean_sd(seeds['latency_ms'])} (one call) | | | |")
 
 
 def record_results(record, results: dict, shapes: dict, cpu_time: bool):

@@ -29,7 +29,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import data.scenes.rubber12_effects as effects  # noqa: E402
 from common.result_records import recording  # noqa: E402
-from runs.fidelity.observations import SEEDS, mean_sd, scene_params  # noqa: E402
+from common.spread import format_mean_sd  # noqa: E402
+from runs.fidelity.observations import SEEDS, scene_params  # noqa: E402
 from runs.fidelity.rubber12 import PAPER_TABLE_II, SceneProbe, extra_trees_r2  # noqa: E402
 
 DEPTHS, POINTS = 10, 9            # the lab table's order: cycle = 10 consecutive presses, repeat = 90
@@ -168,8 +169,8 @@ def measure(name: str) -> dict:
 
 def table_row(measured: dict) -> str:
     held, cv = measured["held_by_seed"], measured["lab_repeat_cv_by_seed"]
-    return (f"| {measured['trial']} | " + " | ".join(mean_sd(column, 3) for column in measured["r2_by_seed"].T) +
-            f" | {held.sum()} of {len(held)} | {mean_sd(100 * cv, 2)} % |")
+    return (f"| {measured['trial']} | " + " | ".join(format_mean_sd(column, ".3f") for column in measured["r2_by_seed"].T) +
+            f" | {held.sum()} of {len(held)} | {format_mean_sd(100 * cv, '.2f')} % |")
 
 
 def main(argv=None):

@@ -76,11 +76,6 @@ def seconds(cfg, repeats: int) -> np.ndarray:
     return np.array(per_sample)
 
 
-def spread(values: np.ndarray, digits: int = 0) -> str:
-    """'mean +- sd' of `values` with `digits` decimals and thousands separators."""
-    return format_mean_sd(values, f",.{digits}f")
-
-
 def effect_lists(full: str, n: int, repeats: int) -> dict:
     """Samples/s with the full and with the minimal effect list."""
     full_cfg, minimal_cfg = load(full, n), load(SCENES[full][0], n)
@@ -89,8 +84,8 @@ def effect_lists(full: str, n: int, repeats: int) -> dict:
     print(f"\n## {full} (~{n} samples; seeds 0-{repeats - 1}, mean ± sd; "
           f"load average {os.getloadavg()[0]:.1f})\n")
     print("| effect list | effects | samples/s |\n|---|---|---|")
-    print(f"| full | {', '.join(full_cfg.effects)} | {spread(1 / t_full)} |")
-    print(f"| minimal | {', '.join(minimal_cfg.effects) or 'none'} | {spread(1 / t_min)} |")
+    print(f"| full | {', '.join(full_cfg.effects)} | {format_mean_sd(1 / t_full, ',.0f')} |")
+    print(f"| minimal | {', '.join(minimal_cfg.effects) or 'none'} | {format_mean_sd(1 / t_min, ',.0f')} |")
     return {"full_effects": list(full_cfg.effects), "minimal_effects": list(minimal_cfg.effects),
             "full_s_per_sample": t_full, "minimal_s_per_sample": t_min}
 
@@ -102,7 +97,7 @@ def effect_costs(full: str, n: int, repeats: int) -> dict:
     listed = OmegaConf.to_container(load(full, n).effects)
     base = {k: v for k, v in listed.items() if k in load(SCENES[full][0], n).effects}
     previous = seconds(load(full, n, base), repeats)
-    print(f"| (minimal: {', '.join(base) or 'none'}) | {spread(1e6 * previous, 2)} |")
+    print(f"| (minimal: {', '.join(base) or 'none'}) | {format_mean_sd(1e6 * previous, ',.2f')} |")
     costs = {"minimal": list(base), "minimal_s_per_sample": previous, "added": []}
     current = dict(base)
     for name, params in listed.items():
@@ -110,7 +105,7 @@ def effect_costs(full: str, n: int, repeats: int) -> dict:
             continue
         current[name] = params
         now = seconds(load(full, n, current), repeats)
-        print(f"| + {name} | {spread(1e6 * (now - previous), 2)} |")
+        print(f"| + {name} | {format_mean_sd(1e6 * (now - previous), ',.2f')} |")
         costs["added"].append({"effect": name, "s_per_sample": now})
         previous = now
     return costs
@@ -124,7 +119,7 @@ def sizes(full: str, n: int, repeats: int) -> dict:
         cfg = load(full, size)
         per_sample = seconds(cfg, repeats)
         count = n_generated(instantiate(cfg).generate())
-        print(f"| {count} | {spread(count * per_sample, 3)} | {spread(1 / per_sample)} |")
+        print(f"| {count} | {format_mean_sd(count * per_sample, ',.3f')} | {format_mean_sd(1 / per_sample, ',.0f')} |")
         rows.append({"samples": count, "s_per_sample": per_sample})
     return {"sizes": rows}
 

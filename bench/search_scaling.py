@@ -41,6 +41,7 @@ sys.path.insert(0, str(ROOT))
 
 from common.result_records import recording  # noqa: E402
 from common.run_status import run_status  # noqa: E402
+from common.spread import format_mean_sd  # noqa: E402
 from hydra_plugins.touchstone_optuna_sweeper.lost_trials import trial_job  # noqa: E402
 from hydra_plugins.touchstone_optuna_sweeper.study_budget import counted  # noqa: E402
 from runs.throwaway_postgres import missing, throwaway_postgres  # noqa: E402
@@ -104,10 +105,6 @@ def one_study(engine: str, workers: int, n_trials: int, kill: bool = False) -> d
             return study_run(folder, storage, workers, n_trials, kill)
 
 
-def spread(values: np.ndarray) -> str:
-    return f"{values.mean():.1f} ± {values.std(ddof=1) if len(values) > 1 else 0:.1f}"
-
-
 def scaling(engines, args) -> list[dict]:
     """The trials-per-minute table, printed row by row; its rows with the per-study numbers."""
     print(f"{os.cpu_count()} cores; {args.trials} trials per study; load average: the 1-minute figure before and after")
@@ -123,8 +120,8 @@ def scaling(engines, args) -> list[dict]:
             rates[workers] = rate = np.array([r["trials_per_min"] for r in runs])
             overhead = np.array([r["overhead_ms"] for r in runs])
             speedup = f"{rate.mean() / rates[1].mean():.2f}×" if 1 in rates else "—"
-            print(f"| {engine} | {workers} | {spread(rate)} | {speedup} | {spread(overhead)} "
-                  f"| {load_before:.1f}–{load_after:.1f} |", flush=True)
+            print(f"| {engine} | {workers} | {format_mean_sd(rate, '.1f')} | {speedup} | "
+                  f"{format_mean_sd(overhead, '.1f')} | {load_before:.1f}–{load_after:.1f} |", flush=True)
             rows.append({"storage": engine, "workers": workers, "trials_per_min": rate, "overhead_ms": overhead,
                          "load_before": load_before, "load_after": load_after})
     return rows

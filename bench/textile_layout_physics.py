@@ -24,7 +24,7 @@ from runs.fidelity.ert import LAYOUTS, layout_variant, single_point_protocol, tw
 MEASURED_CODE = ["data/scenes/ert.py", "data/scenes/ert_effects.py", "data/physics/sheet_conduction.py",
                  "data/physics/press_update.py", "data/physics/textile_contact.py", "runs/fidelity/ert.py",
                  "runs/fidelity/observations.py", "runs/studies/ert_tests.py", "models/ert/",
-                 "models/tikhonov_reconstruction.py", "configs/scene/"]
+                 "data/ert/", "configs/scene/"]
 
 PHYSICAL = {"local_contact": {}, "textile_contact": {}, "viscoelastic_hysteresis": {}}
 RESTORING = {"baseline_drift": {"fraction_per_50_presses": 0.0057, "restoring_presses": 10.0}}   # ert_indentation_*
@@ -135,7 +135,7 @@ def main():
     parser.add_argument("--placement-sd-mm", type=float, default=0.0,
                         help="two-point test: each indenter placed by hand to this sd per axis (mm)")
     parser.add_argument("--layouts", nargs="+", default=list(LAYOUTS), help="scene configs (default: both of the paper's)")
-    parser.add_argument("--kind", default=None, help="reconstruction kind (runs/studies/ert_tests.py RECONSTRUCTIONS; "
+    parser.add_argument("--kind", default=None, help="reconstruction kind (models/ert/registry.py RECONSTRUCTIONS; "
                                                      "default: tikhonov)")
     parser.add_argument("--out", default=None)
     args = parser.parse_args()

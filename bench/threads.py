@@ -25,6 +25,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from common.result_records import recording  # noqa: E402
+from common.spread import format_mean_sd  # noqa: E402
 
 SEED = 0   # train.py's default seed (configs/config.yaml) and the PR-CNN epoch's data
 # What the wall times measure: the thread setting and the pipeline each workload runs under it.
@@ -81,8 +82,8 @@ def measure(workload: str, threads: str, repeats: int, out: Path) -> tuple:
             if busy is not None:
                 busy.kill()
                 busy.wait()
-    print(f"{workload:12s} threads={threads:3s} idle {spread(times['idle'])} s   "
-          f"beside one busy process {spread(times['one busy process'])} s   "
+    print(f"{workload:12s} threads={threads:3s} idle {format_mean_sd(times['idle'], '.1f', one_value='{}')} s   "
+          f"beside one busy process {format_mean_sd(times['one busy process'], '.1f', one_value='{}')} s   "
           f"slowdown {times['one busy process'].mean() / times['idle'].mean():.2f}x", flush=True)
     return workload, threads, times["idle"], times["one busy process"]
 
@@ -102,16 +103,12 @@ def main(argv=None):
                 for workload in args.workloads for threads in ("all", "1")]
         print("\n| workload | threads | idle (s) | beside one busy process (s) | slowdown |\n|---|---|---|---|---|")
         for workload, threads, idle, loaded in rows:
-            print(f"| {workload} | {threads} | {spread(idle)} | {spread(loaded)} | {loaded.mean() / idle.mean():.2f}x |")
+            print(f"| {workload} | {threads} | {format_mean_sd(idle, '.1f', one_value='{}')} | "
+                  f"{format_mean_sd(loaded, '.1f', one_value='{}')} | {loaded.mean() / idle.mean():.2f}x |")
         record.add("slowdown", {"repeats": args.repeats, "cores": os.cpu_count(), "busy_processes": 1,
                                 "timed": "the command's wall time; prcnn_epoch: the epoch alone, in-process",
                                 "rows": [{"workload": w, "threads": t, "idle_s": idle, "loaded_s": loaded}
                                          for w, t, idle, loaded in rows]}, seeds=[SEED])
-
-
-def spread(values) -> str:
-    """mean ± sd over repeats (one value alone as it is)."""
-    return f"{values.mean():.1f}" if len(values) == 1 else f"{values.mean():.1f} ± {values.std(ddof=1):.1f}"
 
 
 if __name__ == "__main__":

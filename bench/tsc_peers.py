@@ -191,15 +191,6 @@ def read_results(path: Path) -> list[dict]:
     return [json.loads(line) for line in path.read_text().splitlines()] if path.exists() else []
 
 
-def mean_sd(values, fmt: str) -> str:
-    values = [v for v in values if v is not None]
-    if not values:
-        return "—"
-    if len(values) == 1:
-        return f"{values[0]:{fmt}} (1 seed)"
-    return format_mean_sd(values, fmt)
-
-
 def summary(rows: list[dict]) -> dict:
     """(set, method) -> accuracies, fit s, latencies, loads, errors."""
     cells = {}
@@ -235,11 +226,13 @@ def table(rows: list[dict]) -> str:
             if not cell["accuracy"]:
                 lines.append(f"| {s} | {m} | {cell['errors'][0] if cell['errors'] else '—'} | | | | |")
                 continue
-            latency = mean_sd(cell["latency_ms"], ".2f")
+            # over the seeds that ran: a seed that failed is left out, a single one says so
+            accuracy, fit_s, latency = (format_mean_sd(cell[key], spec, one_value="{} (1 seed)", missing="—")
+                                        for key, spec in (("accuracy", ".3f"), ("fit_s", ".2f"), ("latency_ms", ".2f")))
             if cell["latency_bulk_ms"]:
                 latency += f" ({np.mean(cell['latency_bulk_ms']):.2f} bulk)"
             note = f"; {len(cell['errors'])} failed: {cell['errors'][0]}" if cell["errors"] else ""
-            lines.append(f"| {s} | {m} | {mean_sd(cell['accuracy'], '.3f')}{note} | {mean_sd(cell['fit_s'], '.2f')} | "
+            lines.append(f"| {s} | {m} | {accuracy}{note} | {fit_s} | "
                          f"{latency} | {min(cell['load']):.1f}–{max(cell['load']):.1f} | {', '.join(cell['notes'])} |")
         published = PUBLISHED.get(s, {})
         text = ", ".join(f"{k} {v:.3f}" for k, v in published.items() if v is not None)

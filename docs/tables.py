@@ -174,12 +174,10 @@ def results_index():
 # ---- recordings against aeon (bench/tsc_peers.py) -------------------------------------------------
 
 def spread_or_missing(values, spec: str) -> str:
-    """mean ± sd over the seeds that ran; a seed that failed (null) is counted and said."""
-    ran = [v for v in values if v is not None]
-    if not ran:
-        return "failed"
-    text = format_mean_sd(ran, spec) if len(ran) > 1 else f"{ran[0]:{spec}} (one seed)"
-    return text + (f" ({len(values) - len(ran)} failed)" if len(ran) < len(values) else "")
+    """mean ± sd over the seeds that ran (a seed that failed is null in the record)."""
+    text = format_mean_sd(values, spec, one_value="{} (one seed)", missing="failed")
+    failed = sum(v is None for v in values)
+    return text + (f" ({failed} failed)" if failed and text != "failed" else "")
 
 
 @table("tsc_peers/two_sets")

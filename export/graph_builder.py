@@ -69,6 +69,14 @@ class GraphBuilder:
         variance = self.op("Div", [squares, self.const(np.array(len(tensors) - 1, dtype=np.float64))])
         return self.op("Cast", [mean], to=TensorProto.FLOAT), variance
 
+    def half_width(self, model_variance: str, data_variance, conformal_scale) -> str:
+        """A calibrated interval's half-width, q * sqrt(model variance + data variance), from a
+        float64 model variance (eq. 23-24), as float32."""
+        total = self.op("Add", [model_variance, self.const(np.asarray(data_variance, dtype=np.float64), "data_var")])
+        half = self.op("Mul", [self.op("Sqrt", [total]),
+                               self.const(np.asarray(conformal_scale, dtype=np.float64), "conformal")])
+        return self.op("Cast", [half], to=TensorProto.FLOAT)
+
     def build(self, inputs, outputs, metadata: dict[str, str], ir_version: int = 10) -> onnx.ModelProto:
         graph = helper.make_graph(self.nodes, "touchstone", inputs, outputs, self.initializers)
         model = helper.make_model(graph, opset_imports=[helper.make_opsetid(d, v) for d, v in self.opsets.items()])

@@ -27,7 +27,6 @@ import torch
 from common.errors import InputError
 from common.progress import progress
 from export.onnx_predictor import OnnxPredictor
-from models.deployable import TimeSeriesPipeline
 
 log = logging.getLogger(__name__)
 
@@ -66,7 +65,7 @@ def single_job(model, seen=None) -> int:
         return 0
     seen.add(id(model))
     count = 0
-    if hasattr(model, "get_params") and hasattr(model, "set_params") and "n_jobs" in getattr(model, "__dict__", {}):
+    if "n_jobs" in getattr(model, "__dict__", {}):   # (only ours and scikit-learn's objects are walked, below)
         model.n_jobs = 1
         count += 1
     children = model.values() if isinstance(model, dict) else model if isinstance(model, (list, tuple)) else \
@@ -77,9 +76,10 @@ def single_job(model, seen=None) -> int:
     return count
 
 
-def _onnx_call(pipeline, model_path, threads: int):
+def _onnx_call(model_path, threads: int):
+    """The exported model's own entry for one batch: windows or rows, as its metadata says."""
     predictor = OnnxPredictor(model_path, threads=threads)
-    return predictor.predict_windows if isinstance(pipeline, TimeSeriesPipeline) else predictor.predict_array
+    return predictor.predict_windows if predictor.reads_windows else predictor.predict_array
 
 
 def measure(pipeline, model_path=None, budget_s: float = 1.0, compare: bool = True, calls: int = 100) -> dict:
@@ -98,7 +98,7 @@ def measure(pipeline, model_path=None, budget_s: float = 1.0, compare: bool = Tr
     if not compare:
         if exported and calls > 0:
             cost["onnx_threads"] = {"onnx_1_thread": 1}
-            cost["latency_batch1_us"] = {"onnx_1_thread": latency_us(_onnx_call(pipeline, model_path, 1), one, 0.0,
+            cost["latency_batch1_us"] = {"onnx_1_thread": latency_us(_onnx_call(model_path, 1), one, 0.0,
                                                                      min_reps=calls, max_reps=calls)}
         return cost
     batch = np.resize(pipeline.examples, (1024,) + pipeline.examples.shape[1:])
@@ -106,7 +106,7 @@ def measure(pipeline, model_path=None, budget_s: float = 1.0, compare: bool = Tr
     runners = {"eager": pipeline.predict_raw}
     if exported:
         for name, threads in (("onnx_1_thread", 1), ("onnx_default", 0)):
-            runners[name] = _onnx_call(pipeline, model_path, threads)
+            runners[name] = _onnx_call(model_path, threads)
     cost.update({"torch_threads": torch.get_num_threads(), "eager_baseline": EAGER_BASELINE,
                  "eager_estimators_set_to_one_job": n_single,
                  "onnx_threads": {"onnx_1_thread": 1, "onnx_default": "onnxruntime default (all cores)"},

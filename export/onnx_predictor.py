@@ -27,13 +27,64 @@ from common.threads import configured_threads
 from data.readers.table_reader import check_numeric_columns, where
 from data.units import clip_columns
 
-KINDS = ("regression", "classification")
-# The graph's one input (metadata 'input'; by kind when a file has none) and its first output per
-# kind (export/pipelines.py writes them). A regression reads rows; a classifier rows or windows.
-INPUT_NAME = {"regression": "channels", "classification": "window"}
-INPUTS = {"regression": ("channels",), "classification": ("channels", "window")}
-MAIN_OUTPUT = {"regression": "prediction", "classification": "probabilities"}
 INPUT_DTYPES = {"tensor(double)": np.float64, "tensor(float)": np.float32}
+
+
+@dataclass(frozen=True)
+class Kind:
+    """What a kind of model (metadata 'kind', written by export/pipelines.py) reads and writes: the
+    metadata key naming its output columns, the graph inputs it may read (metadata 'input'; the
+    default when a file has none) and its first output. A regression reads rows; a classifier
+    rows or windows."""
+    labels: str
+    inputs: tuple[str, ...]
+    default_input: str
+    main_output: str
+
+    def table(self, predictor, out: dict) -> pd.DataFrame:
+        """One output row per input row of a table."""
+        raise NotImplementedError
+
+    def outputs(self, predictor, with_unit) -> list[str]:
+        """What the model writes, for --help (`with_unit` names a column with its unit)."""
+        raise NotImplementedError
+
+
+class Regression(Kind):
+    def table(self, predictor, out):
+        """The targets, and their 95 % bounds when the model has them."""
+        targets = predictor.targets
+        prediction = out["prediction"].astype(np.float64)  # bounds in float64: float32 sums could overflow
+        # predictions and bounds within each target's physical range (data/units.py), as the run reports them
+        result = pd.DataFrame(clip_columns(prediction, targets), columns=targets)
+        if "interval_half_width" in out:
+            half = out["interval_half_width"].astype(np.float64)
+            lower, upper = clip_columns(prediction - half, targets), clip_columns(prediction + half, targets)
+            for k, target in enumerate(targets):
+                result[f"{target}_lower95"], result[f"{target}_upper95"] = lower[:, k], upper[:, k]
+        return result
+
+    def outputs(self, predictor, with_unit):
+        bounds = len(predictor.outputs) > 1
+        return ["  output: " + ", ".join(with_unit(t) for t in predictor.targets)
+                + (", each with _lower95 and _upper95" if bounds else "")]
+
+
+class Classification(Kind):
+    def table(self, predictor, out):
+        """The predicted class and one probability column per class."""
+        return predictor._classes_frame(out["probabilities"])
+
+    def outputs(self, predictor, with_unit):
+        label = predictor.metadata.get("label")  # the target column a table classifier was trained on
+        return [f"  classes{f' of {label!r}' if label else ''} ({len(predictor.classes)}): "
+                f"{', '.join(predictor.classes)}",
+                "  output: " + ("recording (when the input names them), start_step, " if predictor.reads_windows
+                                else "") + "predicted, " + ", ".join(f"p_{c}" for c in predictor.classes)]
+
+
+KINDS = {"regression": Regression("targets", ("channels",), "channels", "prediction"),
+         "classification": Classification("classes", ("channels", "window"), "window", "probabilities")}
 
 
 class OnnxPredictor:
@@ -68,17 +119,15 @@ class OnnxPredictor:
         self.kind = self.metadata["kind"]
         if self.kind not in KINDS:
             raise InputError(f"{path}: metadata 'kind' must be one of {', '.join(KINDS)}, got {self.kind[:40]!r}")
+        self.reads = KINDS[self.kind]
         self.channels = self._names("channels")
         self.outputs = self._names("outputs")
-        if self.kind == "regression":
-            self.targets = self._names("targets")
-            self.output_width = len(self.targets)
-        else:
-            self.classes = self._names("classes")
-            self.output_width = len(self.classes)
-        self.input_name = self.metadata.get("input", INPUT_NAME[self.kind])
-        if self.input_name not in INPUTS[self.kind]:
-            raise InputError(f"{self.path}: metadata 'input' must be {' or '.join(map(repr, INPUTS[self.kind]))} "
+        labels = self._names(self.reads.labels)
+        setattr(self, self.reads.labels, labels)   # self.targets or self.classes
+        self.output_width = len(labels)
+        self.input_name = self.metadata.get("input", self.reads.default_input)
+        if self.input_name not in self.reads.inputs:
+            raise InputError(f"{self.path}: metadata 'input' must be {' or '.join(map(repr, self.reads.inputs))} "
                              f"for a {self.kind} model, got {self.input_name[:40]!r}")
         self.reads_windows = self.input_name == "window"
         if self.reads_windows:
@@ -144,15 +193,14 @@ class OnnxPredictor:
             raise InputError(f"{self.path}: the graph's input '{name}' has shape {shape}, but metadata "
                              f"'channels'{' and window_steps' if self.reads_windows else ''} say "
                              f"(batch, {', '.join(map(str, self.input_shape))})")
-        if [o[0] for o in outputs] != self.outputs or self.outputs[0] != MAIN_OUTPUT[self.kind]:
+        if [o[0] for o in outputs] != self.outputs or self.outputs[0] != self.reads.main_output:
             raise InputError(f"{self.path}: metadata 'outputs' says {self.outputs} but the graph returns "
                              f"{[o[0] for o in outputs]}; a {self.kind} model's first output is "
-                             f"'{MAIN_OUTPUT[self.kind]}'")
-        named = "targets" if self.kind == "regression" else "classes"
+                             f"'{self.reads.main_output}'")
         for output, shape in outputs:
             if not _fits(shape, (self.output_width,)):
                 raise InputError(f"{self.path}: the graph's output '{output}' has shape {shape}, "
-                                 f"but metadata '{named}' names {self.output_width}")
+                                 f"but metadata '{self.reads.labels}' names {self.output_width}")
 
     # -- running the graph ------------------------------------------------------------------
     def _model_input(self, values: np.ndarray, locate) -> np.ndarray:
@@ -219,17 +267,7 @@ class OnnxPredictor:
         check_numeric_columns(frame, self.channels, "channel", source)
         readings = frame[self.channels].to_numpy(dtype=np.float64)
         out = self._run(self._model_input(readings, self._cell(source)), lambda row: f"{source}: {where(source, row)}")
-        if self.kind == "classification":
-            return self._classes_frame(out["probabilities"])
-        prediction = out["prediction"].astype(np.float64)  # bounds in float64: float32 sums could overflow
-        # predictions and bounds within each target's physical range (data/units.py), as the run reports them
-        result = pd.DataFrame(clip_columns(prediction, self.targets), columns=self.targets)
-        if "interval_half_width" in out:
-            half = out["interval_half_width"].astype(np.float64)
-            lower, upper = clip_columns(prediction - half, self.targets), clip_columns(prediction + half, self.targets)
-            for k, target in enumerate(self.targets):
-                result[f"{target}_lower95"], result[f"{target}_upper95"] = lower[:, k], upper[:, k]
-        return result
+        return self.reads.table(self, out)
 
     # -- windows of recordings: a time-series classifier --------------------------------------
     def predict_windows(self, windows: np.ndarray) -> np.ndarray:

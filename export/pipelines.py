@@ -6,33 +6,34 @@ normalisation, for models trained on normalised channels) -> physics features an
 intervals `interval_half_width` (the conformal scale times sigma_total, eq. 21-24, computed in
 the graph from the fold models' spread, the candidates' disagreement and sigma_data).
 Classification table: `channels` as for regression -> the same front end -> the classifier's
-probabilities, temperature-calibrated (models/classic_classifiers.py) -> `probabilities`
-[batch, n_classes]. Time series: `window` [batch, channels, steps] float32 raw window ->
-`probabilities`. Metadata describe the inputs and outputs so the predict side can check a file
-against them: `kind` (regression or classification), `input` (channels or window), `channels`,
-`outputs`, and `targets` / `classes` (with `label`, the target column, for a table classifier).
+probabilities -> `probabilities` [batch, n_classes]. Time series: `window` [batch, channels,
+steps] float32 raw window -> `probabilities`. The model's own nodes come from its class's
+converter (export/converters/). Metadata describe the inputs and outputs so the predict side can
+check a file against them: `kind` (regression or classification), `input` (channels or
+window), `channels`, `outputs`, and `targets` / `classes` (with `label`, the target column, for
+a table classifier).
 """
+import functools
 import json
+import logging
+import time
 import tomllib
 from pathlib import Path
 
-import numpy as np
 import onnx
 import torch
 from onnx import TensorProto
 
+from common.atomic import atomic_write
+from export.converters.registry import Piece, convert
 from export.graph_builder import GraphBuilder, tensor
-from export.torch_graphs import RegressionFrontEnd, ResMLPInUnits, WindowClassifier, to_onnx
-from export.sklearn_graphs import classic_to_onnx, table_classifier_to_onnx
-from export.tree_graphs import tree_to_onnx
-from models.classic_regressors import ClassicRegressor
-from models.kfold_blend import KFoldBlend
+from export.torch_graphs import RegressionFrontEnd, to_onnx
+from models.capabilities import capabilities
 from models.deployable import RegressionPipeline, TableClassifierPipeline, TimeSeriesPipeline
-from models.resmlp_regressor import ResMLPRegressor
-from models.weighted_blend import ValidationWeightedBlend
-from models.trees import TreeRegressor
 
+log = logging.getLogger(__name__)
 ROOT = Path(__file__).resolve().parents[1]
+REGISTRY = "the pipeline graphs (export/pipelines.py GRAPHS)"
 
 
 def touchstone_version() -> str:
@@ -41,125 +42,114 @@ def touchstone_version() -> str:
         return tomllib.load(handle)["project"]["version"]
 
 
-def _leaf(builder, model, features, n_features, n_targets, opset, prefix) -> str:
-    if isinstance(model, ResMLPRegressor):
-        proto = to_onnx(ResMLPInUnits(model), torch.zeros(2, n_features), "features", "y", opset)
-    elif isinstance(model, TreeRegressor):
-        proto = tree_to_onnx(model, n_features, n_targets, opset)
-    elif isinstance(model, ClassicRegressor):  # seed 001's linear, SVR and GP regressors
-        proto = classic_to_onnx(model, n_features, n_targets, opset)
-    else:
-        raise TypeError(f"no ONNX exporter for {type(model).__name__}")
-    return builder.add_model(proto, {"features": features}, prefix)["y"]
-
-
-def _mean_and_model_variance(builder, model, features, n_features, n_targets, opset, prefix):
-    """(mean, model variance or None) of one candidate, K-fold blended or single."""
-    if isinstance(model, KFoldBlend):
-        folds = [_leaf(builder, m, features, n_features, n_targets, opset, f"{prefix}/fold{k}")
-                 for k, m in enumerate(model.models_)]
-        return builder.mean_and_variance(folds)
-    return _leaf(builder, model, features, n_features, n_targets, opset, prefix), None
-
-
-def _table_front(builder, pipeline, opset) -> str:
-    """Raw `channels` -> (normalisation) -> physics features, standardised: the `features` tensor."""
+def _table_front(pipeline, opset) -> tuple[GraphBuilder, str]:
+    """A builder whose graph starts: raw `channels` -> (normalisation) -> physics features,
+    standardised; and the name of that `features` tensor."""
     front = to_onnx(RegressionFrontEnd(pipeline.feature_groups, pipeline.scaler_mean, pipeline.scaler_scale,
                                        pipeline.normalisation),
                     torch.ones(2, len(pipeline.channel_names), dtype=torch.float64), "channels", "features", opset)
-    return builder.add_model(front, {"channels": "channels"}, "front")["features"]
-
-
-def table_classifier_graph(pipeline: TableClassifierPipeline, opset: int, metadata: dict) -> onnx.ModelProto:
     builder = GraphBuilder(opset)
-    features = _table_front(builder, pipeline, opset)
-    proto = table_classifier_to_onnx(pipeline.model, len(pipeline.feature_names), opset)
-    builder.identity(builder.add_model(proto, {"features": features}, "model")["probabilities"], "probabilities")
-    return builder.build([tensor("channels", ["batch", len(pipeline.channel_names)], TensorProto.DOUBLE)],
-                         [tensor("probabilities", ["batch", len(pipeline.classes)])], metadata)
+    return builder, builder.add_model(front, {"channels": "channels"}, "front")["features"]
 
 
-def regression_graph(pipeline: RegressionPipeline, opset: int, metadata: dict) -> onnx.ModelProto:
-    n_channels, n_features, n_targets = len(pipeline.channel_names), len(pipeline.feature_names), len(pipeline.target_names)
-    builder = GraphBuilder(opset)
-    features = _table_front(builder, pipeline, opset)
-    model = pipeline.model
-    outputs = [tensor("prediction", ["batch", n_targets])]
-    if isinstance(model, ValidationWeightedBlend):
-        parts = [_mean_and_model_variance(builder, m, features, n_features, n_targets, opset, f"cand{i}")
-                 for i, m in enumerate(model.models_.values())]
-        weights = [builder.const(w.astype(np.float32), "weight") for w in model.weights_]
-        terms = [builder.op("Mul", [m, w]) for (m, _), w in zip(parts, weights)]
-        mean = terms[0]
-        for term in terms[1:]:
-            mean = builder.op("Add", [mean, term])
-        builder.identity(mean, "prediction")
-        if hasattr(model, "conformal_scale_"):
-            # The mixture variance in float64: squares of far-extrapolated predictions (an open
-            # channel at 1e9 ohm) overflow float32 long before their square roots would.
-            double = lambda t: builder.op("Cast", [t], to=TensorProto.DOUBLE)  # noqa: E731
-            mean64, variance = double(mean), None
-            for (m, v), w in zip(parts, model.weights_):
-                gap = builder.op("Sub", [double(m), mean64])
-                spread = builder.op("Mul", [gap, gap])
-                if v is not None:
-                    spread = builder.op("Add", [spread, v])
-                term = builder.op("Mul", [spread, builder.const(w.astype(np.float64), "weight64")])
-                variance = term if variance is None else builder.op("Add", [variance, term])
-            _interval(builder, variance, model)
-            outputs.append(tensor("interval_half_width", ["batch", n_targets]))
-    else:
-        mean, variance = _mean_and_model_variance(builder, model, features, n_features, n_targets, opset, "model")
-        builder.identity(mean, "prediction")
-        if variance is not None and hasattr(model, "conformal_scale_"):
-            _interval(builder, variance, model)
-            outputs.append(tensor("interval_half_width", ["batch", n_targets]))
-    return builder.build([tensor("channels", ["batch", n_channels], TensorProto.DOUBLE)], outputs, metadata)
+class RegressionGraph:
+    @staticmethod
+    def metadata(pipeline) -> dict[str, str]:
+        units = {t: t.rsplit("_", 1)[-1] for t in pipeline.target_names}
+        return {"kind": "regression", "input": "channels", "targets": json.dumps(pipeline.target_names),
+                "target_units": json.dumps(units), "features": json.dumps(pipeline.feature_names)}
+
+    @staticmethod
+    def outputs(pipeline) -> list[str]:
+        intervals = capabilities(pipeline.model).intervals and pipeline.model.calibrated
+        return ["prediction"] + (["interval_half_width"] if intervals else [])
+
+    @staticmethod
+    def graph(pipeline, opset: int) -> tuple[GraphBuilder, list, list]:
+        """With the calibrated interval's half-width where the model gives one."""
+        builder, features = _table_front(pipeline, opset)
+        n_targets = len(pipeline.target_names)
+        piece = Piece(builder, features, len(pipeline.feature_names), n_targets, opset, "model", intervals=True)
+        out = convert(piece, pipeline.model)
+        outputs = [tensor(builder.identity(out.value, "prediction"), ["batch", n_targets])]
+        if out.half_width is not None:
+            outputs.append(tensor(builder.identity(out.half_width, "interval_half_width"), ["batch", n_targets]))
+        return builder, [tensor("channels", ["batch", len(pipeline.channel_names)], TensorProto.DOUBLE)], outputs
 
 
-def _interval(builder, model_variance, model):
-    """half-width = q * sqrt(model variance + data variance), from a float64 model variance."""
-    total = builder.op("Add", [model_variance, builder.const(model.data_variance_.astype(np.float64), "data_var")])
-    sigma = builder.op("Sqrt", [total])
-    half = builder.op("Mul", [sigma, builder.const(model.conformal_scale_.astype(np.float64), "conformal")])
-    builder.identity(builder.op("Cast", [half], to=TensorProto.FLOAT), "interval_half_width")
+class TableClassifierGraph:
+    @staticmethod
+    def metadata(pipeline) -> dict[str, str]:
+        return {"kind": "classification", "input": "channels", "label": pipeline.label,
+                "classes": json.dumps(pipeline.classes), "features": json.dumps(pipeline.feature_names)}
+
+    @staticmethod
+    def outputs(pipeline) -> list[str]:
+        return ["probabilities"]
+
+    @staticmethod
+    def graph(pipeline, opset: int) -> tuple[GraphBuilder, list, list]:
+        builder, features = _table_front(pipeline, opset)
+        piece = Piece(builder, features, len(pipeline.feature_names), len(pipeline.classes), opset, "model")
+        builder.identity(convert(piece, pipeline.model).value, "probabilities")
+        return (builder, [tensor("channels", ["batch", len(pipeline.channel_names)], TensorProto.DOUBLE)],
+                [tensor("probabilities", ["batch", len(pipeline.classes)])])
 
 
-def timeseries_graph(pipeline: TimeSeriesPipeline, opset: int, metadata: dict) -> onnx.ModelProto:
-    n_channels = len(pipeline.channel_names)
-    module = WindowClassifier(pipeline)
-    proto = to_onnx(module, torch.zeros(2, n_channels, pipeline.raw_length), "window", "probabilities", opset)
-    builder = GraphBuilder(opset)
-    out = builder.add_model(proto, {"window": "window"}, "net")["probabilities"]
-    builder.identity(out, "probabilities")
-    return builder.build([tensor("window", ["batch", n_channels, pipeline.raw_length])],
-                         [tensor("probabilities", ["batch", len(pipeline.classes)])], metadata)
+class TimeSeriesGraph:
+    @staticmethod
+    def metadata(pipeline) -> dict[str, str]:
+        return {"kind": "classification", "input": "window", "classes": json.dumps(pipeline.classes),
+                "window_steps": str(pipeline.raw_length), "decimate": str(pipeline.decimate),
+                # the rate of the raw windows the graph takes, as the data declared it; unknown when they did not
+                "sample_rate_hz": str(pipeline.description.get("sample_rate_hz") or "unknown")}
+
+    outputs = TableClassifierGraph.outputs
+
+    @staticmethod
+    def graph(pipeline, opset: int) -> tuple[GraphBuilder, list, list]:
+        n_channels = len(pipeline.channel_names)
+        builder = GraphBuilder(opset)
+        piece = Piece(builder, "window", n_channels, len(pipeline.classes), opset, "net", pipeline=pipeline)
+        builder.identity(convert(piece, pipeline.model).value, "probabilities")
+        return (builder, [tensor("window", ["batch", n_channels, pipeline.raw_length])],
+                [tensor("probabilities", ["batch", len(pipeline.classes)])])
 
 
-def metadata_for(pipeline, config_hash: str, opset: int) -> dict[str, str]:
+# The graph of each kind of deployable pipeline, found by the pipeline's type
+GRAPHS = {RegressionPipeline: RegressionGraph, TableClassifierPipeline: TableClassifierGraph,
+          TimeSeriesPipeline: TimeSeriesGraph}
+
+
+def graph_of(pipeline):
+    for cls in type(pipeline).__mro__:
+        if cls in GRAPHS:
+            return GRAPHS[cls]
+    raise LookupError(f"no ONNX graph for a {type(pipeline).__module__}.{type(pipeline).__qualname__} in {REGISTRY}")
+
+
+def metadata_for(pipeline, config_hash: str, opset: int, outputs: list[str] | None = None) -> dict[str, str]:
+    """The model file's metadata; `outputs`: the graph's outputs, by default those its model declares."""
+    kind = graph_of(pipeline)
     common = {"touchstone_version": touchstone_version(), "config_hash": config_hash, "opset": str(opset),
               "channels": json.dumps(pipeline.channel_names), "model": type(pipeline.model).__name__}
-    if isinstance(pipeline, RegressionPipeline):
-        units = {t: t.rsplit("_", 1)[-1] for t in pipeline.target_names}
-        return {**common, "kind": "regression", "input": "channels", "targets": json.dumps(pipeline.target_names),
-                "target_units": json.dumps(units), "features": json.dumps(pipeline.feature_names),
-                "outputs": json.dumps(["prediction"] + (["interval_half_width"] if hasattr(pipeline.model, "conformal_scale_") else []))}
-    if isinstance(pipeline, TableClassifierPipeline):
-        return {**common, "kind": "classification", "input": "channels", "label": pipeline.label,
-                "classes": json.dumps(pipeline.classes), "features": json.dumps(pipeline.feature_names),
-                "outputs": json.dumps(["probabilities"])}
-    return {**common, "kind": "classification", "input": "window", "classes": json.dumps(pipeline.classes),
-            "window_steps": str(pipeline.raw_length), "decimate": str(pipeline.decimate),
-            # the rate of the raw windows the graph takes, as the data declared it; unknown when they did not
-            "sample_rate_hz": str(pipeline.description.get("sample_rate_hz") or "unknown"),
-            "outputs": json.dumps(["probabilities"])}
+    return {**common, **kind.metadata(pipeline),
+            "outputs": json.dumps(kind.outputs(pipeline) if outputs is None else outputs)}
 
 
 def export_pipeline(pipeline, opset: int, config_hash: str) -> onnx.ModelProto:
-    """`config_hash`: export/run_export.py's config_hash of the run's configuration, recorded in the metadata."""
-    metadata = metadata_for(pipeline, config_hash, opset)
-    if isinstance(pipeline, RegressionPipeline):
-        return regression_graph(pipeline, opset, metadata)
-    if isinstance(pipeline, TableClassifierPipeline):
-        return table_classifier_graph(pipeline, opset, metadata)
-    return timeseries_graph(pipeline, opset, metadata)
+    """`config_hash`: export/run_export.py's config_hash of the run's configuration, recorded in the
+    metadata; the metadata's `outputs` are the ones the graph gives."""
+    metadata = metadata_for(pipeline, config_hash, opset, outputs=[])
+    builder, inputs, outputs = graph_of(pipeline).graph(pipeline, opset)
+    metadata["outputs"] = json.dumps([output.name for output in outputs])
+    return builder.build(inputs, outputs, metadata)
+
+
+def write_onnx(pipeline, path, opset: int = 18, configuration_hash: str = "unknown", start: float | None = None) -> Path:
+    """The one writer of a run's ONNX file: the pipeline as one self-contained graph, atomically."""
+    start = time.perf_counter() if start is None else start
+    data = export_pipeline(pipeline, opset, configuration_hash).SerializeToString()
+    path = atomic_write(path, functools.partial(Path.write_bytes, data=data))
+    log.info("exported %s (%.1f MB) in %.1f s", path, path.stat().st_size / 1e6, time.perf_counter() - start)
+    return path

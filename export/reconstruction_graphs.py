@@ -1,4 +1,4 @@
-"""Fitted ERT reconstructions as ONNX graphs: `tikhonov_to_onnx` (models/tikhonov_reconstruction.py)
+"""Fitted ERT reconstructions as ONNX graphs: `tikhonov_to_onnx` (models/ert/tikhonov.py)
 and `linear_image_to_onnx` (models/ert/: Gauss-Newton and GREIT, below the first).
 
 TikhonovReconstruction:
@@ -24,6 +24,8 @@ LinearImageReconstruction (models/ert/linear_image.py):
 import numpy as np
 import onnx
 from onnx import TensorProto, helper, numpy_helper
+from sklearn.exceptions import NotFittedError
+from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
 
@@ -32,10 +34,16 @@ def _const(name, array, dtype=np.float32):
     return numpy_helper.from_array(np.asarray(array, dtype=dtype), name)
 
 
+def _require_fitted(model, attribute: str) -> None:
+    try:
+        check_is_fitted(model, attribute)
+    except NotFittedError:
+        raise InputError(f"the {type(model).__name__} is not fitted; call fit before exporting it") from None
+
+
 def tikhonov_to_onnx(model, opset: int = 17) -> onnx.ModelProto:
     """The reconstruction of a fitted TikhonovReconstruction as a self-contained ONNX model."""
-    if not hasattr(model, "inverse_"):
-        raise InputError("the reconstruction is not fitted; call fit before exporting it")
+    _require_fitted(model, "inverse_")
     n = model.pixels_per_side
     m = model.field_pixels
     n_channels = model.inverse_.shape[1]
@@ -96,8 +104,7 @@ def tikhonov_to_onnx(model, opset: int = 17) -> onnx.ModelProto:
 
 def linear_image_to_onnx(model, opset: int = 17) -> onnx.ModelProto:
     """A fitted LinearImageReconstruction (GaussNewtonReconstruction, GreitReconstruction) as one ONNX model."""
-    if not hasattr(model, "image_map_"):
-        raise InputError("the reconstruction is not fitted; call fit before exporting it")
+    _require_fitted(model, "image_map_")
     n_pixels, n_channels = model.image_map_.shape[0], model.compression_.shape[1]
     c0, c1, c2 = model.force_coefficients_
     inits = [

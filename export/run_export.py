@@ -3,7 +3,7 @@
 Reads the run's pipeline.npz (models/fitted_state.py: a format that cannot run code) and its
 .hydra/config.yaml for the config hash, and writes one self-contained <run_dir>/model.onnx,
 atomically: a finished run re-exported (another opset, a newer exporter). A run itself exports
-its in-memory pipeline with `write_onnx` (runs/run.py) when `export.enabled` is true.
+its in-memory pipeline with `write_onnx` (export/pipelines.py; runs/run.py) when `export.enabled` is true.
 """
 import argparse
 import logging
@@ -13,10 +13,9 @@ from pathlib import Path
 
 from omegaconf import OmegaConf
 
-from common.atomic import atomic_write
 from common.errors import InputError
 from common.run_status import config_hash
-from export.pipelines import export_pipeline
+from export.pipelines import write_onnx
 from models.deployable import PIPELINE_FILE, load_pipeline
 
 log = logging.getLogger(__name__)
@@ -39,15 +38,6 @@ def export_run(run_dir, opset: int = 18, file_name: str = "model.onnx", configur
             log.warning("%s: no .hydra/config.yaml, so the model's config_hash is 'unknown'", run_dir)
             configuration_hash = "unknown"
     return write_onnx(pipeline, run_dir / file_name, opset, configuration_hash, start)
-
-
-def write_onnx(pipeline, path, opset: int = 18, configuration_hash: str = "unknown", start: float | None = None) -> Path:
-    """The one writer of a run's ONNX file: the pipeline as one self-contained graph, atomically."""
-    start = time.perf_counter() if start is None else start
-    model = export_pipeline(pipeline, opset, configuration_hash)
-    path = atomic_write(path, lambda tmp: tmp.write_bytes(model.SerializeToString()))
-    log.info("exported %s (%.1f MB) in %.1f s", path, path.stat().st_size / 1e6, time.perf_counter() - start)
-    return path
 
 
 def main(argv=None) -> int:

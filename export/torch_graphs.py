@@ -1,4 +1,5 @@
-"""Torch modules that wrap a deployable pipeline for ONNX, and the torch exporter call.
+"""Torch modules that wrap a pipeline's front end or a model for ONNX, and the torch exporter call
+every torch piece goes through (export/converters/ say which model each wrapper serves).
 
 The preprocessing steps themselves are not restated here: the min-max normalisation, the physics
 features, the FSR calibration and the decimation are the data side's own torch code

@@ -20,20 +20,22 @@ import warnings
 import numpy as np
 from scipy.optimize import minimize_scalar
 from scipy.special import log_softmax, softmax
-from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.exceptions import ConvergenceWarning
-from sklearn.ensemble import ExtraTreesClassifier, RandomForestClassifier
 from sklearn.linear_model import LogisticRegression
 from sklearn.neural_network import MLPClassifier
-from sklearn.tree import DecisionTreeClassifier
+from sklearn.neural_network._stochastic_optimizers import AdamOptimizer
+from sklearn.preprocessing import LabelBinarizer
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from common.errors import InputError
-from common.threads import configured_threads
+from models.capabilities import declare
+from models.estimator_base import TouchstoneClassifier
+from models.forest_kinds import TREE_KINDS, forest
+from models.storable import storable
 
 log = logging.getLogger(__name__)
-TREE_KINDS = ("decision_tree", "random_forest", "extra_trees")
 KINDS = TREE_KINDS + ("mlp", "logistic_regression")
+storable(LogisticRegression, MLPClassifier, AdamOptimizer, LabelBinarizer)   # what the non-tree kinds hold
 EPS = 1e-12               # log(0) guard, as scikit-learn's temperature scaling adds
 LOG_BETA_BOUNDS = (-10.0, 10.0)
 
@@ -55,7 +57,7 @@ def calibrated(proba: np.ndarray, beta: float) -> np.ndarray:
     return softmax(beta * np.log(np.asarray(proba, dtype=np.float64) + EPS), axis=1)
 
 
-class TableClassifier(ClassifierMixin, BaseEstimator):
+class TableClassifier(TouchstoneClassifier):
     """`kind` picks the scikit-learn classifier; the tree settings are the regression trees'
     (models/trees.py), `hidden_layer_sizes`/`max_iter` the MLP's, `C` logistic regression's."""
 
@@ -73,16 +75,14 @@ class TableClassifier(ClassifierMixin, BaseEstimator):
         self.n_jobs = n_jobs
         self.seed = seed
 
+    def __sklearn_tags__(self):
+        return declare(super().__sklearn_tags__(), calibrates_probabilities=True, named_by="kind", size="n_parameters")
+
     def _base(self):
-        n_jobs = self.n_jobs if self.n_jobs is not None else (configured_threads() or 1)
-        trees = dict(max_depth=self.max_depth, max_features=self.max_features,
-                     min_samples_leaf=self.min_samples_leaf, random_state=self.seed)
-        if self.kind == "decision_tree":
-            return DecisionTreeClassifier(**trees)
-        if self.kind == "random_forest":
-            return RandomForestClassifier(n_estimators=self.n_estimators, n_jobs=n_jobs, **trees)
-        if self.kind == "extra_trees":
-            return ExtraTreesClassifier(n_estimators=self.n_estimators, n_jobs=n_jobs, **trees)
+        trees = forest(self.kind, True, self.n_estimators, self.max_depth, self.max_features, self.min_samples_leaf,
+                       self.n_jobs, self.seed)
+        if trees is not None:
+            return trees
         if self.kind == "mlp":
             # Adam until the training loss stops improving (scikit-learn's tol), at most max_iter epochs
             return MLPClassifier(hidden_layer_sizes=tuple(self.hidden_layer_sizes), max_iter=self.max_iter,
@@ -100,6 +100,8 @@ class TableClassifier(ClassifierMixin, BaseEstimator):
         if any(issubclass(w.category, ConvergenceWarning) for w in caught):  # one log line, not a warning's two
             log.warning("%s: stopped at model.max_iter=%d before the training loss settled", self.kind, self.max_iter)
         self.classes_ = self.estimator_.classes_
+        if self.kind not in TREE_KINDS:   # max_iter's iterations: the epochs or solver steps taken
+            self.n_iter_ = self.estimator_.n_iter_
         # one thread to predict: the forest's sum over trees then has one order (same run, same bits)
         self.estimator_.set_params(**{key: 1 for key in self.estimator_.get_params() if key.endswith("n_jobs")})
         self.temperature_beta_ = 1.0   # uncalibrated until `calibrate`
@@ -119,7 +121,8 @@ class TableClassifier(ClassifierMixin, BaseEstimator):
         return calibrated(self.raw_proba(X), self.temperature_beta_)
 
     def predict(self, X) -> np.ndarray:
-        return self.classes_[self.predict_proba(X).argmax(axis=1)]
+        proba = self.predict_proba(X)   # first: unfitted, it says so (NotFittedError)
+        return self.classes_[proba.argmax(axis=1)]
 
     def feature_importances(self):
         return getattr(self.estimator_, "feature_importances_", None)

@@ -28,9 +28,8 @@ same affine step after the scikit-learn pieces.
   subset, reported as `n_train_used_`) are used.
 """
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.gaussian_process import GaussianProcessRegressor
-from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, WhiteKernel
+from sklearn.gaussian_process.kernels import RBF, ConstantKernel, DotProduct, Product, Sum, WhiteKernel
 from sklearn.linear_model import LinearRegression
 from sklearn.metrics import r2_score
 from sklearn.svm import SVR
@@ -38,9 +37,14 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 
 from common.errors import InputError
 from data.splits.indices import carve_validation
+from models.capabilities import declare
+from models.estimator_base import TouchstoneRegressor
+from models.storable import storable
 
 KINDS = ("linear_regression", "ridge", "svr", "gaussian_process")
 RIDGE_ALPHAS = (0.01, 0.1, 1.0, 10.0, 100.0, 1000.0)
+# What the kinds hold: the fitted library estimators and the GP's kernel terms
+storable(LinearRegression, SVR, GaussianProcessRegressor, ConstantKernel, DotProduct, Product, RBF, Sum, WhiteKernel)
 
 
 def ridge(X, z, alpha: float) -> LinearRegression:
@@ -51,7 +55,7 @@ def ridge(X, z, alpha: float) -> LinearRegression:
     return LinearRegression().fit(np.vstack([X, eye, -eye]), np.vstack([z, zeros]))
 
 
-class ClassicRegressor(RegressorMixin, BaseEstimator):
+class ClassicRegressor(TouchstoneRegressor):
     def __init__(self, kind="linear_regression", svr_c=1.0, svr_epsilon=0.01, gp_restarts=0,
                  max_train_samples=1000, ridge_alphas=RIDGE_ALPHAS, val_fraction=0.15, seed=0):
         self.kind = kind
@@ -64,7 +68,7 @@ class ClassicRegressor(RegressorMixin, BaseEstimator):
         self.seed = seed
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
+        tags = declare(super().__sklearn_tags__(), size="n_parameters")
         tags.target_tags.multi_output = True
         return tags
 

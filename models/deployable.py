@@ -18,15 +18,18 @@ from data.physics.force_sensing_resistor import CALIBRATION_KEYS, calibrated_cha
 from data.preprocessing.features import compute_features, enabled_groups
 from data.preprocessing.minmax_scaling import MinMaxScaling
 from data.preprocessing.windows import decimate
+from models.capabilities import capabilities
 from models.fitted_state import load_fitted, save_fitted
+from models.storable import storable
 
 PIPELINE_FILE = "pipeline.npz"  # in a run folder
 
 
-@dataclass
-class RegressionPipeline:
+@dataclass(kw_only=True)
+class FeaturePipeline:
+    """Rows of raw channel readings -> (the data set's min-max normalisation) -> physics features,
+    standardised -> the model: what a regression and a table classifier share."""
     channel_names: list[str]  # the raw readings it takes
-    target_names: list[str]
     feature_groups: list[str]
     feature_names: list[str]
     scaler_mean: np.ndarray
@@ -42,37 +45,34 @@ class RegressionPipeline:
             readings = self.normalisation.normalise(readings)
         return (compute_features(readings, self.feature_groups) - self.scaler_mean) / self.scaler_scale
 
+
+@storable
+@dataclass(kw_only=True)
+class RegressionPipeline(FeaturePipeline):
+    target_names: list[str]
+
     def predict_raw(self, readings):
         """(prediction in units, interval half-width or None) for raw channel readings."""
         X = self.features(readings)
-        if hasattr(self.model, "conformal_scale_"):
+        if capabilities(self.model).intervals and self.model.calibrated:
             mean, sigma = self.model.predict_std(X)
             return mean, self.model.conformal_scale_ * sigma
         return np.asarray(self.model.predict(X)).reshape(len(X), -1), None
 
 
-@dataclass
-class TableClassifierPipeline:
+@storable
+@dataclass(kw_only=True)
+class TableClassifierPipeline(FeaturePipeline):
     """A classification table's model: raw channel readings -> features -> class probabilities
-    (models/classic_classifiers.py, calibrated)."""
-    channel_names: list[str]
+    (models/classic_classifiers.py, calibrated; no normalisation: a user's raw table)."""
     label: str               # the target column whose classes it predicts
     classes: list[str]
-    feature_groups: list[str]
-    feature_names: list[str]
-    scaler_mean: np.ndarray
-    scaler_scale: np.ndarray
-    model: object
-    description: dict = field(default_factory=dict)
-    examples: np.ndarray | None = None  # raw test-split readings: latency measurements
-
-    features = RegressionPipeline.features   # the same front end (no normalisation: a user's raw table)
-    normalisation = None
 
     def predict_raw(self, readings) -> np.ndarray:
         return self.model.predict_proba(self.features(readings))
 
 
+@storable
 @dataclass
 class TimeSeriesPipeline:
     channel_names: list[str]
@@ -104,23 +104,31 @@ class TimeSeriesPipeline:
         return self.model.predict_proba(self.preprocess(windows))
 
 
+storable(MinMaxScaling)   # a regression pipeline's normalisation (data/preprocessing/minmax_scaling.py)
+PIPELINES = (RegressionPipeline, TableClassifierPipeline, TimeSeriesPipeline)
+
+
+def _front_end(datamodule, model) -> dict:
+    """The fields a table's pipeline takes from its datamodule: its features and their scaling."""
+    return dict(channel_names=list(datamodule.channel_names), feature_groups=enabled_groups(datamodule.features),
+                feature_names=list(datamodule.feature_names), scaler_mean=datamodule.scaler.mean_.copy(),
+                scaler_scale=datamodule.scaler.scale_.copy(), model=model,
+                description={"source": datamodule.table.description},
+                examples=datamodule.table.channels[datamodule.test_idx].copy())
+
+
 def regression_pipeline(datamodule, model) -> RegressionPipeline:
-    table = datamodule.table
-    channels, examples = list(datamodule.channel_names), table.channels[datamodule.test_idx].copy()
-    if table.normalisation is not None:  # deployed on the raw readings the channels came from
-        channels, examples = list(table.normalisation.raw_channels), table.normalisation.raw(examples)
-    return RegressionPipeline(channels, list(datamodule.target_names),
-                              enabled_groups(datamodule.features), list(datamodule.feature_names),
-                              datamodule.scaler.mean_.copy(), datamodule.scaler.scale_.copy(), model,
-                              {"source": table.description}, examples, table.normalisation)
+    pipeline = RegressionPipeline(**_front_end(datamodule, model), target_names=list(datamodule.target_names),
+                                  normalisation=datamodule.table.normalisation)
+    if pipeline.normalisation is not None:  # deployed on the raw readings the channels came from
+        pipeline.channel_names = list(pipeline.normalisation.raw_channels)
+        pipeline.examples = pipeline.normalisation.raw(pipeline.examples)
+    return pipeline
 
 
 def table_classifier_pipeline(datamodule, model) -> TableClassifierPipeline:
-    return TableClassifierPipeline(list(datamodule.channel_names), datamodule.label, list(datamodule.classes),
-                                   enabled_groups(datamodule.features), list(datamodule.feature_names),
-                                   datamodule.scaler.mean_.copy(), datamodule.scaler.scale_.copy(), model,
-                                   {"source": datamodule.table.description},
-                                   datamodule.table.channels[datamodule.test_idx].copy())
+    return TableClassifierPipeline(**_front_end(datamodule, model), label=datamodule.label,
+                                   classes=list(datamodule.classes))
 
 
 def timeseries_pipeline(datamodule, model) -> TimeSeriesPipeline:
@@ -146,6 +154,6 @@ def save_pipeline(pipeline, path) -> Path:
 def load_pipeline(path):
     """A saved pipeline; InputError (one line) for a file that is not one."""
     pipeline = load_fitted(path)
-    if not isinstance(pipeline, (RegressionPipeline, TableClassifierPipeline, TimeSeriesPipeline)):
+    if not isinstance(pipeline, PIPELINES):
         raise InputError(f"{path}: holds a {type(pipeline).__name__}, not a deployable pipeline")
     return pipeline

@@ -15,9 +15,10 @@ array), bytes, tensor (its array, device, whether it is a Parameter and requires
 random_state / generator (numpy's, by their state), factory (a network factory, see below), and
 object: a class named by its full name with the state its own pickling protocol
 (`__reduce_ex__`) gives, restored the way pickle restores it (`cls.__new__`, then `__setstate__`
-or the attributes) - but only for a class on ALLOWED_CLASSES, written out below, checked before
-anything of the class is imported or called. The one class built by calling it is
-scikit-learn's Cython Tree (CALLED_CLASSES), with its sizes. A container, array, tensor or
+or the attributes) - but only for a class in the storable-class registry (models/storable.py:
+classes register themselves, a library's class is registered by the model of ours that holds
+it), checked before anything of the class is called. The one class built by calling it is
+scikit-learn's Cython Tree (registered `called`), with its sizes. A container, array, tensor or
 object met a second time is {"ref": id} to the "id" its first occurrence carries, so shared
 objects stay shared (an LSTM's flat weights are its parameters) and cycles through objects
 resolve.
@@ -27,7 +28,7 @@ refused when saving (TypeError naming where it sits), so a new model type that h
 loudly in the round-trip tests instead of writing a file that cannot be read. The one exception
 is a network factory, the `functools.partial(NetClass, **settings)` a time-series classifier
 is configured with (Hydra's `_partial_: true`): stored as the class name and its keyword
-values, rebuilt as a plain functools.partial of an allowed torch.nn.Module class, which is
+values, rebuilt as a plain functools.partial of a registered torch.nn.Module class, which is
 only called if the loaded estimator is fitted again.
 
 Loading a file that is not such a file - not a zip, a member missing, bad JSON, a truncated
@@ -37,7 +38,6 @@ import contextlib
 import copyreg
 import functools
 import gc
-import importlib
 import json
 import math
 from collections import OrderedDict
@@ -48,91 +48,15 @@ import torch
 
 from common.atomic import atomic_write
 from common.errors import InputError
+from models.storable import CALLED, REGISTRY, STORABLE, NotStorable, class_name, is_storable, storable_class
 
 FORMAT, VERSION = "touchstone fitted state", 1
 STRUCTURE = "structure"
 
-# Every class whose instances may be stored and rebuilt, by full name. An instance of any other
-# class is refused when saving, and a file naming one is refused when loading. A class belongs
-# here when its state is data (arrays, numbers, strings, containers and other listed objects)
-# and its constructor or __setstate__ does nothing beyond building itself from that data.
-ALLOWED_CLASSES = frozenset({
-    # what a run deploys, and our estimators and networks
-    "models.deployable.RegressionPipeline",
-    "models.deployable.TimeSeriesPipeline",
-    "models.deployable.TableClassifierPipeline",
-    "data.preprocessing.minmax_scaling.MinMaxScaling",
-    "models.resmlp_regressor.ResMLPRegressor",
-    "models.trees.TreeRegressor",
-    "models.classic_regressors.ClassicRegressor",
-    "models.classic_classifiers.TableClassifier",
-    "models.kfold_blend.KFoldBlend",
-    "models.weighted_blend.ValidationWeightedBlend",
-    "models.timeseries_classifier.TimeSeriesClassifier",
-    "models.nets.resmlp.ResMLP",
-    "models.nets.resmlp.ResidualBlock",
-    "models.nets.resmlp.GaussianNoise",
-    "models.nets.conv_blocks.ResidualConvBlock",
-    "models.nets.prcnn.PRCNN",
-    "models.nets.rescnn.ResCNN",
-    "models.nets.inceptiontime.InceptionTime",
-    "models.nets.inceptiontime.InceptionModule",
-    "models.nets.lstm_fcn.LSTMFCN",
-    "models.rocket.classifier.RocketClassifier",
-    "models.rocket.minirocket.MiniRocket",
-    "models.rocket.minirocket.DilationGroup",
-    "models.rocket.hydra.HydraMiniRocket",
-    "models.rocket.hydra.Hydra",
-    "models.rocket.hydra.HydraDilation",
-    "models.nets.member_average.MemberAverage",
-    # the torch.nn layers those networks are made of
-    "torch.nn.modules.activation.ReLU",
-    "torch.nn.modules.batchnorm.BatchNorm1d",
-    "torch.nn.modules.container.ModuleDict",
-    "torch.nn.modules.container.ModuleList",
-    "torch.nn.modules.container.Sequential",
-    "torch.nn.modules.conv.Conv1d",
-    "torch.nn.modules.dropout.Dropout",
-    "torch.nn.modules.linear.Identity",
-    "torch.nn.modules.linear.Linear",
-    "torch.nn.modules.padding.ConstantPad1d",
-    "torch.nn.modules.pooling.MaxPool1d",
-    "torch.nn.modules.rnn.LSTM",
-    # the scikit-learn estimators inside ours
-    "sklearn.ensemble._forest.ExtraTreesRegressor",
-    "sklearn.ensemble._forest.RandomForestRegressor",
-    "sklearn.tree._classes.DecisionTreeRegressor",
-    "sklearn.tree._classes.ExtraTreeRegressor",
-    "sklearn.tree._tree.Tree",
-    "sklearn.multioutput.MultiOutputRegressor",
-    "sklearn.linear_model._base.LinearRegression",
-    "sklearn.svm._classes.SVR",
-    "sklearn.gaussian_process._gpr.GaussianProcessRegressor",
-    "sklearn.gaussian_process.kernels.ConstantKernel",
-    "sklearn.gaussian_process.kernels.DotProduct",
-    "sklearn.gaussian_process.kernels.Product",
-    "sklearn.gaussian_process.kernels.RBF",
-    "sklearn.gaussian_process.kernels.Sum",
-    "sklearn.gaussian_process.kernels.WhiteKernel",
-    "sklearn.ensemble._forest.ExtraTreesClassifier",
-    "sklearn.ensemble._forest.RandomForestClassifier",
-    "sklearn.tree._classes.DecisionTreeClassifier",
-    "sklearn.tree._classes.ExtraTreeClassifier",
-    "sklearn.linear_model._logistic.LogisticRegression",
-    "sklearn.neural_network._multilayer_perceptron.MLPClassifier",
-    "sklearn.neural_network._stochastic_optimizers.AdamOptimizer",
-    "sklearn.preprocessing._label.LabelBinarizer",
-})
-# Listed classes that pickle rebuilds by calling them with arguments (their sizes), not by __new__
-CALLED_CLASSES = frozenset({"sklearn.tree._tree.Tree"})
 # numpy's bit generators, rebuilt by name for a Generator's state
 BIT_GENERATORS = ("MT19937", "PCG64", "PCG64DXSM", "Philox", "SFC64")
 PLAIN = (type(None), bool, int, float, str)  # JSON's own values (exact types: no subclasses)
 CONTAINERS = {list: "list", tuple: "tuple", set: "set", frozenset: "frozenset"}
-
-
-def class_name(cls) -> str:
-    return f"{cls.__module__}.{cls.__qualname__}"
 
 
 class Unstorable(TypeError):
@@ -232,26 +156,26 @@ class Encoder:
 
     def _factory(self, factory: functools.partial) -> dict:
         cls = factory.func
-        if not (isinstance(cls, type) and issubclass(cls, torch.nn.Module) and class_name(cls) in ALLOWED_CLASSES):
-            raise Unstorable(f"a callable ({factory!r}) is not data; only a factory of a listed network class is "
-                             "stored (models/fitted_state.py ALLOWED_CLASSES)")
+        if not (isinstance(cls, type) and issubclass(cls, torch.nn.Module) and is_storable(cls)):
+            raise Unstorable(f"a callable ({factory!r}) is not data; only a factory of a network class in {REGISTRY} "
+                             "is stored")
         return {"factory": class_name(cls), "args": self._child(tuple(factory.args), "(args)"),
                 "keywords": self._child(dict(factory.keywords), "(keywords)")}
 
     def _object(self, obj, kind) -> dict:
         name = class_name(kind)
-        if name not in ALLOWED_CLASSES and callable(obj):  # a function, lambda, method, class, ...
+        if not is_storable(kind) and callable(obj):  # a function, lambda, method, class, ...
             raise Unstorable(f"{getattr(obj, '__qualname__', repr(obj))!r} ({name}) is code, not data")
-        if name not in ALLOWED_CLASSES:
-            raise Unstorable(f"class {name} is not on the allow-list (models/fitted_state.py ALLOWED_CLASSES); "
-                             "add it there if its state is data")
+        if not is_storable(kind):
+            raise Unstorable(f"class {name} is not in {REGISTRY}; register it (models.storable.storable) if its "
+                             "state is data")
         reduced = obj.__reduce_ex__(4)
         if isinstance(reduced, str) or len(reduced) > 3 and any(part is not None for part in reduced[3:]):
             raise Unstorable(f"{name} pickles itself in a way this format does not store")
         rebuild, args, state = (tuple(reduced) + (None,))[:3]
         if rebuild is copyreg.__newobj__ and len(args) == 1 and args[0] is kind:
             node = {"object": name}
-        elif rebuild is kind and name in CALLED_CLASSES:
+        elif rebuild is kind and name in CALLED:
             node = {"object": name, "args": self._child(tuple(args), "(args)")}
         else:
             raise Unstorable(f"{name} is rebuilt by {rebuild!r}, which this format does not call")
@@ -357,7 +281,7 @@ class Decoder:
             bits.state = self.decode(node["state"])
             return np.random.Generator(bits)
         if "factory" in node:
-            cls = allowed_class(node["factory"])
+            cls = _registered(node["factory"])
             if not issubclass(cls, torch.nn.Module):
                 raise ValueError(f"a factory of {node['factory']}, which is not a network")
             return functools.partial(cls, *self.decode(node["args"]), **self.decode(node["keywords"]))
@@ -376,9 +300,9 @@ class Decoder:
         return blob[offset:offset + size].reshape(shape, order=order)
 
     def _object(self, node: dict, node_id):
-        cls = allowed_class(node["object"])
+        cls = _registered(node["object"])
         if "args" in node:
-            if node["object"] not in CALLED_CLASSES:
+            if node["object"] not in CALLED:
                 raise ValueError(f"{node['object']} is not built by calling it")
             obj = cls(*self.decode(node["args"]))
         else:
@@ -389,16 +313,11 @@ class Decoder:
         return obj
 
 
-def allowed_class(name):
-    """The class of a listed full name, imported only once it is known to be on the list."""
-    if type(name) is not str or name not in ALLOWED_CLASSES:
-        raise NotAllowed(name)
-    module, _, qualname = name.rpartition(".")
-    return getattr(importlib.import_module(module), qualname)
-
-
-class NotAllowed(Exception):
-    pass
+def _registered(name) -> type:
+    """The registered class of a full name: the registry read directly, models/storable.py asked
+    only for a name not registered yet (or refused)."""
+    found = STORABLE.get(name) if type(name) is str else None
+    return found if found is not None else storable_class(name)
 
 
 def set_state(obj, state):
@@ -462,9 +381,9 @@ def load_fitted(path):
             if document.get("version") != VERSION:
                 raise ValueError(f"format version {document.get('version')!r}; this Touchstone reads version {VERSION}")
             return Decoder(blobs).decode(document["root"])
-    except NotAllowed as error:
-        raise InputError(f"{path}: names class {str(error.args[0])[:200]!r}, which is not on the list of classes a "
-                         "fitted-state file may build (models/fitted_state.py); refused") from None
+    except NotStorable as error:
+        raise InputError(f"{path}: names class {str(error.name)[:200]!r}, which is not on the list of classes a "
+                         f"fitted-state file may build ({REGISTRY}); refused") from None
     except FileNotFoundError:
         raise InputError(f"{path}: no such file") from None
     except InputError:

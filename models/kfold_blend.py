@@ -19,21 +19,23 @@ import logging
 import time
 
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.base import clone
 from sklearn.utils.metaestimators import available_if
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from common.errors import InputError
 from common.progress import progress
 from data.splits.indices import kfold_indices
+from models.capabilities import capabilities, declare
 from models.epoch_callback import member_callback
+from models.estimator_base import TouchstoneRegressor
 from models.uncertainty import IntervalMixin
 
 log = logging.getLogger(__name__)
 RESAMPLE = ("kfold", "seeds")
 
 
-class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
+class KFoldBlend(IntervalMixin, TouchstoneRegressor):
     def __init__(self, estimator=None, n_folds=5, seed=0, progress=True, resample="kfold"):
         self.estimator = estimator
         self.n_folds = n_folds
@@ -42,7 +44,9 @@ class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         self.resample = resample
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
+        members = capabilities(self.estimator) if self.estimator is not None else None
+        tags = declare(super().__sklearn_tags__(), intervals=True, fold_costs=True, size="n_parameters",
+                       importances=bool(members and members.importances))
         tags.target_tags.multi_output = True
         tags.target_tags.single_output = True
         return tags
@@ -116,11 +120,11 @@ class KFoldBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         mean, model_variance, data_variance = self.predict_components(X)
         return mean, np.sqrt(model_variance + data_variance)
 
-    def feature_importances(self):
-        """Mean impurity importances over the fold models (trees only), or None."""
-        values = [m.feature_importances() for m in self.models_ if hasattr(m, "feature_importances")]
+    def importances(self):
+        """(its class name, mean impurity importances over the fold models), or None (no trees)."""
+        values = [m.importances()[1] for m in self.models_ if capabilities(m).importances]
         values = [v for v in values if v is not None]
-        return np.mean(values, axis=0) if values else None
+        return (type(self).__name__, np.mean(values, axis=0)) if values else None
 
     @property
     def n_parameters_(self) -> int:

@@ -13,20 +13,21 @@ import math
 
 import numpy as np
 import torch
-from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted, validate_data
 from torch import nn
 
 from common.errors import InputError
 from common.progress import progress
 from data.splits.indices import carve_validation
+from models.capabilities import declare
+from models.estimator_base import TouchstoneRegressor
 from models.nets.resmlp import ResMLP
 from models.distributed import TrainingGroup, rank_seed
 from common.standardise import mean_and_scale
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
 
 
-class ResMLPRegressor(RegressorMixin, BaseEstimator):
+class ResMLPRegressor(TouchstoneRegressor):
     def __init__(self, widths=(256, 128, 96, 64), dropouts=(0.40, 0.35, 0.30, 0.25), noise_std=0.02,
                  lr=1e-3, l1=1e-5, l2=1e-4, batch_size=32, max_epochs=300, early_stopping_patience=30,
                  lr_plateau_patience=10, lr_factor=0.5, val_fraction=0.15, device="cpu", seed=0,
@@ -48,7 +49,7 @@ class ResMLPRegressor(RegressorMixin, BaseEstimator):
         self.progress = progress
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
+        tags = declare(super().__sklearn_tags__(), size="n_parameters")
         tags.target_tags.multi_output = True
         tags.non_deterministic = self.device != "cpu"
         return tags

@@ -24,12 +24,10 @@ epoch, the plateau on the training loss, the epoch of least training loss kept; 
 given are only scored); `folds` (trainer=reference) trains once per stratified fold of the training
 recordings (data/splits/indices.py stratified_folds) as the refit will train (the plateau on the
 training loss, the held-out fold only scored, at every epoch), takes the epoch of the best held-out
-accuracy pooled over the folds (averaged over it and the 10 epochs before it), and refits on every training window for that many epochs: the
-epoch count rests on every training recording instead of a small set's 8-10 validation recordings,
-the model is fitted on all of them, and the validation split stays untouched for reporting and for
-choosing between models. (Each fold early-stopped on its own few held-out recordings stopped at a
-lucky early peak: 7-25 epochs where ArrowHead's refit needs about 100; docs/training_recipes.md.)
-The folds' held-out predictions at the chosen epoch (`out_of_fold_proba_`, each training window
+accuracy pooled over the folds (averaged over it and the 10 epochs before it), and refits on every
+training window for that many epochs: the epoch count rests on every training recording, not a
+small set's few validation recordings (a fold early-stopped on its own few held-out recordings
+stops at a lucky early peak), and the validation split stays untouched for reporting. The folds' held-out predictions at the chosen epoch (`out_of_fold_proba_`, each training window
 predicted by a fit that never saw its recording; `out_of_fold_method_` says how) are kept: a run
 whose validation side is empty (every class has one training recording) reports them as its
 validation scores, and the default model's choice scores the net on them when it trains on every
@@ -39,14 +37,9 @@ training recording (models/validation_choice.py).
 paper: 5) and averages their class probabilities (models/nets/member_average.py), one module,
 so it exports to one ONNX graph.
 
-Several processes (torchrun, submitit tasks) train one net as one process would: models/distributed.py.
-
-BatchNorm: the stored (eval-mode) statistics are a running average over the last few training
-batches, which with few optimiser steps have not settled (a model scored 0.85 on its own training
-windows in eval mode and 1.00 with batch statistics). With `recalibrate_batchnorm` they are
-recomputed over all training windows before each validation pass (as torch.optim.swa_utils.update_bn
-does after weight averaging): the scored and the deployed model are the same network, and the
-training trajectory is unchanged (training batches normalise with their own statistics).
+Several processes (torchrun, submitit tasks) train one net as one process would (models/distributed.py).
+With `recalibrate_batchnorm` the BatchNorm statistics are recomputed over all training windows after
+every epoch's training, before it is scored (models/batchnorm_recalibration.py: why).
 
 Resumable: with `checkpoint_path` the whole training state (weights, optimiser, schedule, RNG
 states, best epoch, last improvement that mattered, history) is written after every epoch, and
@@ -60,28 +53,31 @@ import time
 
 import numpy as np
 import torch
-from sklearn.base import BaseEstimator, ClassifierMixin
 from torch import nn
 
 from common.errors import InputError
 from common.progress import HEARTBEAT_S, on_terminal, progress
 from common.standardise import mean_and_scale
 from data.splits.indices import stratified_folds
+from models.batchnorm_recalibration import recalibrate_batchnorm
+from models.capabilities import declare
 from models.distributed import TrainingGroup, rank_seed
 from models.epoch_callback import member_callback
+from models.estimator_base import TouchstoneClassifier
 from models import fold_epoch_choice
 from models.fold_epoch_choice import best_epoch, each_folds_best_epoch, pooled_curve
 from models.nets.member_average import MemberAverage
 from models.torch_runtime import count_parameters, flush_denormals, resolve_device
-from models.training_checkpoint import RESUME_KEYS, load_checkpoint, save_checkpoint
+from models.training_checkpoint import RESUME_KEYS, TrainingState, load_checkpoint, save_checkpoint
 
 log = logging.getLogger(__name__)
 OPTIMISERS = ("sgd", "adam")
 SCHEDULES = ("milestones", "plateau")
 EPOCH_SELECTIONS = ("validation", "folds", "train_loss")
+CROSS_ENTROPY = nn.CrossEntropyLoss()
 
 
-class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
+class TimeSeriesClassifier(TouchstoneClassifier):
     def __init__(self, network=None, modalities=None, optimizer="sgd", lr=0.05, momentum=0.9, weight_decay=0.0,
                  lr_schedule="milestones", milestones=(5, 15, 25), gamma=0.1, lr_factor=0.5,
                  lr_plateau_patience=50, min_lr=0.0, early_stopping_patience=None, early_stopping_min_patience=None,
@@ -117,10 +113,13 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         self.n_folds = n_folds
         self.ensemble_size = ensemble_size
 
+    def __sklearn_tags__(self):
+        return declare(super().__sklearn_tags__(), epochs=True, reads_windows=True, named_by="network",
+                       size="n_parameters", holds_out_training=self.epoch_selection == "folds")
+
     # -- helpers ----------------------------------------------------------------------------
     def _batches(self, X, size):
-        for start in range(0, len(X), size):
-            yield X[start:start + size]
+        return (X[start:start + size] for start in range(0, len(X), size))
 
     def _scaled(self, X) -> np.ndarray:
         return ((np.asarray(X, dtype=np.float64) - self.channel_mean_) / self.channel_std_).astype(np.float32)
@@ -174,27 +173,6 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
             return torch.optim.lr_scheduler.ReduceLROnPlateau(optimiser, factor=self.lr_factor,
                                                               patience=self.lr_plateau_patience, min_lr=self.min_lr)
         return torch.optim.lr_scheduler.MultiStepLR(optimiser, milestones=list(self.milestones), gamma=self.gamma)
-
-    def _recalibrate(self, Xt, group: TrainingGroup):
-        """Exact training-set BatchNorm statistics for the current weights (momentum None: a
-        cumulative average over the batches). Only the BatchNorm layers are put in training
-        mode, so dropout draws no random numbers and the RNG stream is left as it was. With
-        several ranks each computes its shard of every batch and the moments are summed."""
-        norms = [m for m in self.module_.modules() if isinstance(m, nn.modules.batchnorm._BatchNorm)]
-        if not norms:
-            return
-        momenta = [m.momentum for m in norms]
-        self.module_.eval()
-        for m in norms:
-            m.reset_running_stats()
-            m.momentum = None
-            m.train()
-        with torch.no_grad():
-            for batch in self._batches(Xt, 512):
-                self.module_(group.shard(batch).to(self.device_))
-        for m, momentum in zip(norms, momenta):
-            m.momentum = momentum
-        self.module_.eval()
 
     def _fingerprint(self, shape) -> dict:
         return {"module": type(self.module_).__name__, "shape": list(shape), "n_classes": len(self.classes_),
@@ -309,8 +287,43 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
 
     def _train(self, X, y, X_val, y_val, n_classes, epoch_callback, max_epochs):
         """One network on (X, y), the best epoch on (X_val, y_val) kept; without them, `max_epochs`
-        epochs and the last one kept."""
+        epochs and the last one kept. Build (or resume), then per epoch: train, score, keep the
+        best and judge early stopping, checkpoint, report."""
         group = TrainingGroup()  # this process's part when several train the net (models/distributed.py)
+        X, trained = self._build_network(X, n_classes, group)
+        run = self._training_state(X, group)
+        data = (torch.as_tensor(X), torch.as_tensor(y))
+        validation = None if X_val is None else (X_val, torch.as_tensor(np.asarray(y_val, dtype=np.int64)))
+        start, elapsed_before = time.perf_counter(), run.elapsed_s
+        self.step_losses_ = []  # the global batch's mean loss at every optimiser step of this fit
+        first_epoch = max_epochs if run.stopped else run.epoch   # a resumed run that had stopped early: done
+        bar = progress(range(first_epoch, max_epochs), desc=type(self.module_).__name__, unit="epochs",
+                       enabled=self.progress and group.is_writer)
+        for epoch in bar:
+            epoch_start = time.perf_counter()
+            train_loss, train_accuracy = self._train_epoch(trained, run, data, group, epoch)
+            record = {"epoch": epoch + 1, "train_loss": train_loss, "train_accuracy": train_accuracy,
+                      "lr": run.optimiser.param_groups[0]["lr"], "epoch_s": time.perf_counter() - epoch_start,
+                      "elapsed_s": elapsed_before + time.perf_counter() - start}
+            score = self._epoch_score(record, validation, group, epoch)
+            self.history_.append(record)
+            patience = self._keep_best_and_judge_stopping(run, score, record)
+            self._save_checkpoint(run, group)
+            if epoch_callback is not None:
+                epoch_callback(record)
+            bar.set_postfix({k: f"{v:.3f}" for k, v in record.items() if k.endswith(("loss", "accuracy"))})
+            if run.stopped:
+                log.info("%s: stopped at epoch %d, no improvement that matters since epoch %d (val accuracy %.3f, "
+                         "val loss %.4f; patience %d epochs)", type(self.module_).__name__, epoch + 1, run.improved[2],
+                         run.improved[0], run.improved[1], patience)
+                break
+        bar.close()
+        group.release(self.module_)
+        return self._keep_chosen_epoch(run, validation is not None, X.shape[1])
+
+    def _build_network(self, X, n_classes, group: TrainingGroup):
+        """The standardised training windows and a freshly seeded network for them; returns (the
+        windows, the module as it trains: wrapped when several processes train it)."""
         torch.manual_seed(self.seed)
         self.channel_mean_, self.channel_std_ = mean_and_scale(X, axis=(0, 2), keepdims=True)
         X = self._scaled(X)
@@ -321,126 +334,109 @@ class TimeSeriesClassifier(BaseEstimator, ClassifierMixin):
         trained = group.prepare(self.module_)
         if group.rank:  # rank 0 continues the run's seed stream, so one process trains as it always did
             torch.manual_seed(rank_seed(self.seed, group.rank))
+        return X, trained
+
+    def _training_state(self, X, group: TrainingGroup) -> TrainingState:
+        """Optimiser, schedule and batch order of a fresh fit, or as `resume_from` left them."""
         self.batch_size_ = self.effective_batch_size(len(X))
         optimiser = self._optimiser()
-        schedule = self._schedule(optimiser)
-        loss_fn = nn.CrossEntropyLoss()
-        generator = torch.Generator().manual_seed(self.seed)
-        Xt, yt = torch.as_tensor(X), torch.as_tensor(y)
-        y_val_t = torch.as_tensor(np.asarray(y_val, dtype=np.int64)) if X_val is not None else None
         fingerprint = {**self._fingerprint(X.shape[1:]), "world_size": group.size}  # dropout draws per rank
-        self.history_, best, best_state, improved, first_epoch, elapsed_before = [], None, None, None, 0, 0.0
+        run = TrainingState(self.module_, optimiser, self._schedule(optimiser),
+                            torch.Generator().manual_seed(self.seed), fingerprint)
         if self.resume_from is not None:
-            state = load_checkpoint(self.resume_from, fingerprint)
-            self.module_.load_state_dict(state["module"])
-            optimiser.load_state_dict(state["optimiser"])
-            schedule.load_state_dict(state["schedule"])
-            self.history_, best, best_state = state["history"], state["best"], state["best_state"]
-            improved = state["improved"]
-            first_epoch, elapsed_before = state["epoch"], state["elapsed_s"]
-            generator.set_state(state["generator"])
-            torch.set_rng_state(state["rank_rngs"][group.rank] if group.size > 1 else state["torch_rng"])
-            if state.get("cuda_rng") is not None and torch.cuda.is_available():
-                torch.cuda.set_rng_state_all(state["cuda_rng"])
-            if state["stopped"]:
-                first_epoch = max_epochs  # the interrupted run had already stopped early
-        start = time.perf_counter()
-        stopped = False
-        self.step_losses_ = []  # the global batch's mean loss at every optimiser step of this fit
-        bar = progress(range(first_epoch, max_epochs), desc=type(self.module_).__name__, unit="epochs",
-                       enabled=self.progress and group.is_writer)
-        for epoch in bar:
-            self.module_.train()
-            order = torch.randperm(len(Xt), generator=generator)
-            step_sums, step_sizes, correct, seen = [], [], 0, 0
-            epoch_start = time.perf_counter()
-            # A bar over the batches on a terminal; off a terminal, log lines only once epochs are
-            # long enough that the epoch loop's own heartbeat would leave minutes silent.
-            long_epochs = bool(self.history_) and self.history_[-1].get("epoch_s", 0.0) > HEARTBEAT_S
-            batches = progress(list(self._batches(order, self.batch_size_)), desc=f"epoch {epoch + 1}",
-                               unit="batches",
-                               enabled=self.progress and group.is_writer and (on_terminal() or long_epochs))
-            for batch in batches:
-                if len(batch) < group.smallest_batch():  # BatchNorm cannot normalise a batch of one
-                    continue
-                mine = group.shard(batch)
-                xb, yb = Xt[mine].to(self.device_), yt[mine].to(self.device_)
-                logits = trained(xb)
-                loss = loss_fn(logits, yb) * group.share(len(mine), len(batch))
-                optimiser.zero_grad()
-                loss.backward()
-                optimiser.step()
-                step_sums.append(loss.item() * len(batch) / group.size)
-                step_sizes.append(len(batch))
-                correct += int((logits.argmax(1) == yb).sum())
-                seen += len(mine)
-            *step_sums, correct, seen = group.totals([*step_sums, correct, seen])
-            self.step_losses_ += [s / n for s, n in zip(step_sums, step_sizes)]
-            total = sum(step_sums)
-            if not math.isfinite(total):
-                raise InputError(f"{type(self.module_).__name__}: training diverged at epoch {epoch + 1} "
-                                 "(loss is not finite); lower trainer.lr")
-            if self.recalibrate_batchnorm:
-                self._recalibrate(Xt, group)
-            train_loss = total / max(seen, 1)
-            record = {"epoch": epoch + 1, "train_loss": train_loss, "train_accuracy": correct / max(seen, 1),
-                      "lr": optimiser.param_groups[0]["lr"], "epoch_s": time.perf_counter() - epoch_start,
-                      "elapsed_s": elapsed_before + time.perf_counter() - start}
-            if X_val is not None:  # every rank validates; all act on rank 0's numbers (train_loss: only reports)
-                logits = self._logits(X_val)
-                record["val_loss"], record["val_accuracy"] = group.agree(
-                    (float(loss_fn(logits, y_val_t)), float((logits.argmax(1).numpy() == y_val_t.numpy()).mean())))
-                score = (record["val_accuracy"], record["val_loss"])
-                if getattr(self, "held_out_proba_", None) is not None:   # a fold of epoch_selection=folds
-                    self.held_out_proba_.append(torch.softmax(logits, dim=1).numpy())
-            if self.epoch_selection == "train_loss":  # the references' checkpoint: the least training loss
-                score = (0.0, train_loss)
-            elif X_val is None:  # nothing to choose on: the last epoch is the model
-                score = (float(epoch), 0.0)
-            self.history_.append(record)
-            if self._better(score, best):
-                best = score
-                best_state = copy.deepcopy(self.module_.state_dict())
-            if self._matters(score, improved):
-                improved = (*score, epoch + 1)
-            if self.lr_schedule == "plateau":  # the references watch the loss; we watch validation's
-                schedule.step(train_loss if self.epoch_selection == "train_loss" else record.get("val_loss", train_loss))
-            else:
-                schedule.step()
-            patience = self.patience(improved[2])
-            stopped = patience is not None and epoch + 1 - improved[2] >= patience
-            if self.checkpoint_path is not None:
-                rank_rngs = group.gather(torch.get_rng_state())
-            if self.checkpoint_path is not None and group.is_writer:
-                save_checkpoint(self.checkpoint_path, {
-                    "fingerprint": fingerprint, "epoch": epoch + 1, "stopped": stopped,
-                    "elapsed_s": record["elapsed_s"], "module": self.module_.state_dict(),
-                    "optimiser": optimiser.state_dict(), "schedule": schedule.state_dict(), "best": best,
-                    "best_state": best_state, "improved": improved, "history": self.history_,
-                    "generator": generator.get_state(), "torch_rng": rank_rngs[0],
-                    "cuda_rng": torch.cuda.get_rng_state_all() if torch.cuda.is_available() else None,
-                    **({"rank_rngs": rank_rngs} if group.size > 1 else {})})
-            if epoch_callback is not None:
-                epoch_callback(record)
-            bar.set_postfix({k: f"{v:.3f}" for k, v in record.items() if k.endswith(("loss", "accuracy"))})
-            if stopped:
-                log.info("%s: stopped at epoch %d, no improvement that matters since epoch %d (val accuracy %.3f, "
-                         "val loss %.4f; patience %d epochs)", type(self.module_).__name__, epoch + 1, improved[2],
-                         improved[0], improved[1], patience)
-                break
-        bar.close()
-        group.release(self.module_)
-        if best_state is not None:
-            self.module_.load_state_dict(best_state)
+            run.restore(load_checkpoint(self.resume_from, fingerprint), group.rank, group.size)
+        self.history_ = run.history
+        return run
+
+    def _train_epoch(self, trained, run: TrainingState, data, group: TrainingGroup, epoch: int):
+        """One pass over the training windows in the generator's order, each rank its shard of
+        every batch; returns the epoch's training loss and accuracy."""
+        Xt, yt = data
+        self.module_.train()
+        order = torch.randperm(len(Xt), generator=run.generator)
+        step_sums, step_sizes, correct, seen = [], [], 0, 0
+        # A bar over the batches on a terminal; off a terminal, log lines only once epochs are
+        # long enough that the epoch loop's own heartbeat would leave minutes silent.
+        long_epochs = bool(self.history_) and self.history_[-1].get("epoch_s", 0.0) > HEARTBEAT_S
+        batches = progress(list(self._batches(order, self.batch_size_)), desc=f"epoch {epoch + 1}", unit="batches",
+                           enabled=self.progress and group.is_writer and (on_terminal() or long_epochs))
+        for batch in batches:
+            if len(batch) < group.smallest_batch():  # BatchNorm cannot normalise a batch of one
+                continue
+            mine = group.shard(batch)
+            xb, yb = Xt[mine].to(self.device_), yt[mine].to(self.device_)
+            logits = trained(xb)
+            loss = CROSS_ENTROPY(logits, yb) * group.share(len(mine), len(batch))
+            run.optimiser.zero_grad()
+            loss.backward()
+            run.optimiser.step()
+            step_sums.append(loss.item() * len(batch) / group.size)
+            step_sizes.append(len(batch))
+            correct += int((logits.argmax(1) == yb).sum())
+            seen += len(mine)
+        *step_sums, correct, seen = group.totals([*step_sums, correct, seen])
+        self.step_losses_ += [s / n for s, n in zip(step_sums, step_sizes)]
+        total = sum(step_sums)
+        if not math.isfinite(total):
+            raise InputError(f"{type(self.module_).__name__}: training diverged at epoch {epoch + 1} "
+                             "(loss is not finite); lower trainer.lr")
+        if self.recalibrate_batchnorm:
+            recalibrate_batchnorm(self.module_, self._batches(Xt, 512), self.device_, group)
+        return total / max(seen, 1), correct / max(seen, 1)
+
+    def _epoch_score(self, record: dict, validation, group: TrainingGroup, epoch: int) -> tuple:
+        """What the kept epoch is chosen on (`_better`): the validation accuracy and loss (written
+        into `record`); the least training loss (epoch_selection=train_loss); else the last epoch."""
+        if validation is not None:  # every rank validates; all act on rank 0's numbers (train_loss: only reports)
+            X_val, y_val_t = validation
+            logits = self._logits(X_val)
+            record["val_loss"], record["val_accuracy"] = group.agree(
+                (float(CROSS_ENTROPY(logits, y_val_t)), float((logits.argmax(1).numpy() == y_val_t.numpy()).mean())))
+            if getattr(self, "held_out_proba_", None) is not None:   # a fold of epoch_selection=folds
+                self.held_out_proba_.append(torch.softmax(logits, dim=1).numpy())
+        if self.epoch_selection == "train_loss":  # the references' checkpoint: the least training loss
+            return (0.0, record["train_loss"])
+        if validation is None:  # nothing to choose on: the last epoch is the model
+            return (float(epoch), 0.0)
+        return (record["val_accuracy"], record["val_loss"])
+
+    def _keep_best_and_judge_stopping(self, run: TrainingState, score: tuple, record: dict) -> int | None:
+        """Keep the epoch's weights if it scores best, note an improvement that matters, step the
+        learning rate and decide whether training stops (run.stopped); returns the patience."""
+        if self._better(score, run.best):
+            run.best, run.best_state = score, copy.deepcopy(self.module_.state_dict())
+        if self._matters(score, run.improved):
+            run.improved = (*score, record["epoch"])
+        if self.lr_schedule == "plateau":  # the references watch the loss; we watch validation's
+            train_loss = record["train_loss"]
+            run.schedule.step(train_loss if self.epoch_selection == "train_loss" else record.get("val_loss", train_loss))
+        else:
+            run.schedule.step()
+        patience = self.patience(run.improved[2])
+        run.stopped = patience is not None and record["epoch"] - run.improved[2] >= patience
+        run.epoch, run.elapsed_s = record["epoch"], record["elapsed_s"]
+        return patience
+
+    def _save_checkpoint(self, run: TrainingState, group: TrainingGroup):
+        if self.checkpoint_path is not None:
+            rank_rngs = group.gather(torch.get_rng_state())   # every rank takes part; one writes
+            if group.is_writer:
+                save_checkpoint(self.checkpoint_path, run.checkpoint(rank_rngs))
+
+    def _keep_chosen_epoch(self, run: TrainingState, validated: bool, n_channels: int):
+        """Load the kept epoch's weights and note which epoch it was, how many ran and the last
+        improvement that mattered."""
+        if run.best_state is not None:
+            self.module_.load_state_dict(run.best_state)
         self.module_.eval()
         if self.epoch_selection == "train_loss":
-            self.best_epoch_ = next((r["epoch"] for r in self.history_ if r["train_loss"] == best[1]), len(self.history_))
+            self.best_epoch_ = next((r["epoch"] for r in self.history_ if r["train_loss"] == run.best[1]), len(self.history_))
         else:
-            self.best_epoch_ = next((r["epoch"] for r in self.history_ if X_val is not None
-                                     and (r["val_accuracy"], r["val_loss"]) == best), len(self.history_))
+            self.best_epoch_ = next((r["epoch"] for r in self.history_ if validated
+                                     and (r["val_accuracy"], r["val_loss"]) == run.best), len(self.history_))
         self.n_epochs_ = len(self.history_)
-        self.improved_epoch_ = improved[2] if improved is not None else 0  # the last improvement that mattered
-        self.n_features_in_ = X.shape[1]
+        self.improved_epoch_ = run.improved[2] if run.improved is not None else 0  # the last improvement that mattered
+        self.n_features_in_ = n_channels
         return self
 
     def predict_proba(self, X):

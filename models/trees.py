@@ -7,20 +7,22 @@ targets: on raw targets a pressure in pascals (sd ~7e4) would choose every split
 millimetres, and R² of x would depend on the unit pressure is given in.
 """
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin
-from sklearn.ensemble import ExtraTreesRegressor, RandomForestRegressor
 from sklearn.multioutput import MultiOutputRegressor
-from sklearn.tree import DecisionTreeRegressor
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from common.errors import InputError
 from common.standardise import mean_and_scale
-from common.threads import configured_threads
+from models.capabilities import declare
+from models.classic_classifiers import TableClassifier
+from models.estimator_base import TouchstoneRegressor
+from models.forest_kinds import TREE_KINDS, forest
+from models.storable import storable
 
-KINDS = ("random_forest", "extra_trees", "decision_tree")
+KINDS = TREE_KINDS
+storable(MultiOutputRegressor)   # per_output: one forest per target
 
 
-class TreeRegressor(RegressorMixin, BaseEstimator):
+class TreeRegressor(TouchstoneRegressor):
     def __init__(self, kind="extra_trees", n_estimators=400, max_depth=14, max_features: str | float | None = "sqrt",
                  min_samples_leaf=1, per_output=False, n_jobs=None, seed=0):
         self.kind = kind
@@ -33,21 +35,14 @@ class TreeRegressor(RegressorMixin, BaseEstimator):
         self.seed = seed
 
     def _base(self):
-        # n_jobs None: the run's thread setting (common/threads.py), so forests do not fight
-        # whatever else runs on the machine; -1 still means every core.
-        n_jobs = self.n_jobs if self.n_jobs is not None else (configured_threads() or 1)
-        common = dict(max_depth=self.max_depth, max_features=self.max_features,
-                      min_samples_leaf=self.min_samples_leaf, random_state=self.seed)
-        if self.kind == "decision_tree":
-            return DecisionTreeRegressor(**common)
-        if self.kind == "random_forest":
-            return RandomForestRegressor(n_estimators=self.n_estimators, n_jobs=n_jobs, **common)
-        if self.kind == "extra_trees":
-            return ExtraTreesRegressor(n_estimators=self.n_estimators, n_jobs=n_jobs, **common)
-        raise InputError(f"model.kind must be one of {', '.join(KINDS)}, got '{self.kind}'")
+        base = forest(self.kind, False, self.n_estimators, self.max_depth, self.max_features, self.min_samples_leaf,
+                      self.n_jobs, self.seed)
+        if base is None:
+            raise InputError(f"model.kind must be one of {', '.join(KINDS)}, got '{self.kind}'")
+        return base
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
+        tags = declare(super().__sklearn_tags__(), importances=True, has_classifier=True, size="n_nodes")
         tags.target_tags.multi_output = True
         return tags
 
@@ -94,6 +89,13 @@ class TreeRegressor(RegressorMixin, BaseEstimator):
     def feature_importances(self):
         """Impurity importances, averaged over the per-output forests when there are several."""
         return np.mean([m.feature_importances_ for m in self._forests()], axis=0)
+
+    def importances(self):
+        return type(self).__name__, self.feature_importances()
+
+    def classifier(self):
+        """The classifier of this kind with these settings, for a table whose target is a class label."""
+        return TableClassifier(**{k: v for k, v in self.get_params().items() if k != "per_output"})
 
     @property
     def n_nodes_(self) -> int:

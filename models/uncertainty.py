@@ -65,6 +65,11 @@ def coverage(y, lower, upper) -> np.ndarray:
 class IntervalMixin:
     """Adds calibrate / predict_interval to an estimator that implements predict_std."""
 
+    @property
+    def calibrated(self) -> bool:
+        """Whether `calibrate` has set the interval scale (an exported graph then gives intervals)."""
+        return getattr(self, "conformal_scale_", None) is not None
+
     def calibrate(self, X, y, alpha: float = 0.05):
         """The conformal scale per target from calibration rows (X, y); with too few of them, the
         raw scale z_{1 - alpha/2} (1.96 at 95 %) and `calibration_note_` saying why."""

@@ -47,13 +47,15 @@ import logging
 import time
 
 import numpy as np
-from sklearn.base import BaseEstimator, clone
+from sklearn.base import clone
 from sklearn.metrics import accuracy_score, log_loss, r2_score
 from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
 from data.splits.indices import carve_validation
+from models.capabilities import declare
 from models.epoch_callback import member_callback
+from models.estimator_base import TouchstoneEstimator
 
 log = logging.getLogger(__name__)
 TASKS = ("regression", "classification", "recordings")
@@ -75,7 +77,7 @@ def _fit_kwargs(estimator, **kwargs) -> dict:
     return {k: v for k, v in kwargs.items() if k in accepted and v is not None}
 
 
-class ValidationChoice(BaseEstimator):
+class ValidationChoice(TouchstoneEstimator):
     def __init__(self, candidates=None, task="auto", budget_s=None, relative_cost=None, ensemble=True,
                  val_fraction=0.15, significance_z=1.96, seed=0, score_on="auto"):
         self.candidates = candidates
@@ -87,6 +89,9 @@ class ValidationChoice(BaseEstimator):
         self.ensemble = ensemble
         self.val_fraction = val_fraction
         self.seed = seed
+
+    def __sklearn_tags__(self):
+        return declare(super().__sklearn_tags__(), chooses=True, reads_windows=True)
 
     def candidate_set(self, task: str) -> dict:
         """{name: estimator} this choice fits for data of `task`."""
@@ -211,6 +216,7 @@ class ValidationChoice(BaseEstimator):
                 if rank > ranks[best]:
                     best, self.ensemble_weights_ = ENSEMBLE, weights
         self.chosen_ = best
+        self.n_features_in_ = np.shape(X)[1]   # columns of a table, channels of windows
         self.reason_ = self._reason(ranks)
         log.info("model choice: %s", self.reason_)
         return self

@@ -22,14 +22,16 @@ import time
 
 import numpy as np
 from scipy.optimize import nnls
-from sklearn.base import BaseEstimator, RegressorMixin, clone
+from sklearn.base import clone
 from sklearn.metrics import r2_score
 from sklearn.utils.validation import check_is_fitted, validate_data
 
 from common.errors import InputError
 from common.progress import progress
 from data.splits.indices import carve_validation
+from models.capabilities import capabilities, declare
 from models.epoch_callback import member_callback
+from models.estimator_base import TouchstoneRegressor
 from models.kfold_blend import KFoldBlend
 from models.uncertainty import IntervalMixin
 
@@ -69,7 +71,7 @@ def stacking_weights(predictions: np.ndarray, y: np.ndarray) -> np.ndarray:
     return weights / total
 
 
-class ValidationWeightedBlend(IntervalMixin, RegressorMixin, BaseEstimator):
+class ValidationWeightedBlend(IntervalMixin, TouchstoneRegressor):
     """Candidates fitted on the training split, blended with weights chosen without the test split.
 
     weights="paper": the seed's rule (eq. 18-20) from validation R^2 (`mode`, `per_target`).
@@ -91,7 +93,9 @@ class ValidationWeightedBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         self.seed = seed
 
     def __sklearn_tags__(self):
-        tags = super().__sklearn_tags__()
+        trees = any(capabilities(e).importances for e in (self.candidates or {}).values())
+        tags = declare(super().__sklearn_tags__(), intervals=True, weighs_candidates=True, importances=trees,
+                       size="n_parameters")
         tags.target_tags.multi_output = True
         return tags
 
@@ -223,15 +227,14 @@ class ValidationWeightedBlend(IntervalMixin, RegressorMixin, BaseEstimator):
         model_variance = (w * (model_variances + (means - mean) ** 2)).sum(axis=0)
         return mean, np.sqrt(model_variance + self.data_variance_)
 
-    def selected_tree_importances(self):
+    def importances(self):
         """(name, importances) of the highest-weight candidate that has them (trees), or None."""
         order = np.argsort(-self.weights_.sum(axis=1))
         for index in order:
             model = list(self.models_.values())[index]
-            if hasattr(model, "feature_importances"):
-                values = model.feature_importances()
-                if values is not None:
-                    return self.names_[index], values
+            given = model.importances() if capabilities(model).importances else None
+            if given is not None:
+                return self.names_[index], given[1]
         return None
 
     @property

@@ -26,23 +26,18 @@ from pathlib import Path
 
 import numpy as np
 from hydra.utils import instantiate
-from omegaconf import OmegaConf
+from sklearn.base import is_classifier
 
 from common.errors import InputError
-from models.classic_classifiers import TableClassifier
+from models.capabilities import capabilities, fit, model_name, model_size
 from models.deployable import table_classifier_pipeline, timeseries_pipeline
-from models.rocket.classifier import RocketClassifier
-from models.validation_choice import ValidationChoice
+from models.validation_choice import task_of
 from runs.report.classification_report import write_classification_report
-from runs.regression import chosen
+from runs.regression import check_deployable
 from runs.report.metrics import classification_metrics
 
 log = logging.getLogger(__name__)
 MIN_CALIBRATION_ROWS = 20   # fewer: a temperature fitted on them is noise; probabilities stay as the classifier gives them
-TABLE_CLASSIFIER = "models.classic_classifiers.TableClassifier"
-TREES = "models.trees.TreeRegressor"
-REGRESSION_ONLY = "models.weighted_blend.ValidationWeightedBlend"   # model=blend: its recipe names a classifier
-CHOICE = "models.validation_choice.ValidationChoice"                 # model=auto: its classification candidates
 
 
 @dataclass
@@ -70,22 +65,20 @@ def checkpoint_folder(output_dir) -> Path:
     return Path(output_dir) / "checkpoint"
 
 
-def table_classifier(cfg) -> TableClassifier:
+def table_classifier(cfg):
     """The classifier a classification table fits for the configured model (the module docstring)."""
     node = cfg.model
-    if node.get("_target_") == CHOICE:
-        return instantiate(node)
-    if node.get("_target_") == REGRESSION_ONLY and cfg.get("classifier") is not None:
+    model = instantiate(node)
+    if capabilities(model).chooses:
+        return model
+    if capabilities(model).weighs_candidates and cfg.get("classifier") is not None:
         node = cfg.classifier
-    target = node.get("_target_")
-    if target == TABLE_CLASSIFIER:
-        return instantiate(node)
-    if target == TREES:
-        settings = OmegaConf.to_container(node, resolve=True)
-        settings.pop("per_output", None)
-        settings["_target_"] = TABLE_CLASSIFIER
-        return instantiate(settings)
-    name = str(target).rsplit(".", 1)[-1] + (f"(kind={node.kind})" if "kind" in node else "")
+        model = instantiate(node)
+    if capabilities(model).has_classifier:   # a tree regressor: the classifier of its kind, same settings
+        return model.classifier()
+    if is_classifier(model) and not capabilities(model).reads_windows:
+        return model
+    name = str(node.get("_target_")).rsplit(".", 1)[-1] + (f"(kind={node.kind})" if "kind" in node else "")
     raise InputError(f"{name} is a regression model; a classification table trains model=extra_trees, random_forest, "
                      "decision_tree, mlp or logistic_regression")
 
@@ -115,7 +108,7 @@ def _table_ids(datamodule, rows) -> dict:
 
 def _recording_groups(model, datamodule) -> dict:
     """The recording of every training window, for a model that folds them."""
-    if "epoch_selection" not in model.get_params():
+    if not capabilities(model).epochs:
         return {}
     if len(datamodule.train_window_recording) != len(datamodule.y_train):
         if model.epoch_selection == "folds":
@@ -133,7 +126,7 @@ def _validation_can_join_training(datamodule) -> bool:
             and len(datamodule.train_window_recording) == len(datamodule.y_train))
 
 
-def _scores_on_training(choice: ValidationChoice, datamodule) -> bool:
+def _scores_on_training(choice, datamodule) -> bool:
     """Whether the default model trains its candidates on every training recording and scores them on
     their held-out predictions (model.score_on=auto: where validation can join training)."""
     if choice.score_on != "auto":
@@ -141,27 +134,73 @@ def _scores_on_training(choice: ValidationChoice, datamodule) -> bool:
     return _validation_can_join_training(datamodule)
 
 
-def _holds_out_its_training(model) -> bool:
-    """A chosen recordings model that scores itself on held-out predictions of every training
-    recording: a net choosing its epoch count on folds (trainer=reference) or a ROCKET member (the
-    ridge head's leave-one-out). Like the default model, it then trains on every training recording
-    the file declares instead of the 80 % left by the validation carve (issue 27: on ArrowHead 36,
-    not 28)."""
-    return isinstance(model, RocketClassifier) or model.get_params().get("epoch_selection") == "folds"
+class Side:
+    """What differs between the two kinds of classification data, decided once per run."""
+    task = None
+
+    def __init__(self, datamodule):
+        self.datamodule = datamodule
+
+
+class Rows(Side):
+    """A classification table: one row per press (models/classic_classifiers.py or a library
+    classifier), probabilities calibrated on the held-out rows."""
+    task = "classification"
+
+    def model(self, cfg):
+        return table_classifier(cfg)
+
+    def pools_validation(self, model) -> bool:
+        return False
+
+    def calibrate(self, model) -> dict:
+        if capabilities(model).calibrates_probabilities:
+            return _calibrate(model, self.datamodule)
+        return {"method": None, "rows": int(self.datamodule.calibration_idx.size),
+                "note": f"{model_name(model)} does not calibrate its probabilities; they are the classifier's own"}
+
+    def evaluated(self, model, summary, val_recordings) -> tuple:
+        """(pipeline, validation ids, test ids, hyper-parameters beyond the common ones)."""
+        dm = self.datamodule
+        return (table_classifier_pipeline(dm, model), _table_ids(dm, dm.val_idx), _table_ids(dm, dm.test_idx), {})
+
+
+class Windows(Side):
+    """Windows of recordings (the networks of models/timeseries_classifier.py, the ROCKET family)."""
+    task = "recordings"
+
+    def model(self, cfg):
+        model = instantiate(cfg.model)
+        if not (capabilities(model).reads_windows or capabilities(model).chooses):
+            raise InputError(f"{model_name(model)} classifies table rows (one per press); recordings train "
+                             "model=prcnn, rescnn, inceptiontime or lstm_fcn")
+        return model
+
+    def pools_validation(self, model) -> bool:
+        """A model that scores itself on held-out predictions of every training recording (a net
+        choosing its epoch count on folds, trainer=reference, or a ROCKET member, the ridge head's
+        leave-one-out) trains, like the default model, on every training recording the file
+        declares instead of the 80 % left by the validation carve (issue 27: on ArrowHead 36, not 28)."""
+        return capabilities(model).holds_out_training and _validation_can_join_training(self.datamodule)
+
+    def calibrate(self, model) -> None:
+        return None
+
+    def evaluated(self, model, summary, val_recordings) -> tuple:
+        dm = self.datamodule
+        return (timeseries_pipeline(dm, model), {"recording": val_recordings}, {"recording": dm.test_window_recording},
+                {"augment": bool(dm.n_virtual_windows), "window": str(summary["window"])})
+
+
+SIDES = {side.task: side for side in (Rows, Windows)}
 
 
 def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> ClassificationResult:
     (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     summary = datamodule.summary()
-    table = hasattr(datamodule, "table")
-    if table:
-        model = table_classifier(cfg)
-    elif cfg.model.get("_target_") == TABLE_CLASSIFIER:
-        raise InputError("model.kind classifiers are for tables (one row per press); recordings train model=prcnn, "
-                         "rescnn, inceptiontime or lstm_fcn")
-    else:
-        model = instantiate(cfg.model)
-    choice = model if isinstance(model, ValidationChoice) else None   # model=auto: chosen on validation
+    side = SIDES[task_of(X_train, y_train)](datamodule)   # the data's shape says: rows of a table, or windows
+    model = side.model(cfg)
+    choice = model if capabilities(model).chooses else None   # model=auto: chosen on validation
     # The rows the model is fitted on; with the choice scored on held-out training predictions, the
     # carved validation recordings join them (each candidate then holds rows out itself).
     X_fit, y_fit = X_train, y_train
@@ -169,15 +208,15 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
     fit_levels = getattr(datamodule, "train_levels_per_window", None)
     pooled = False
     if choice is not None:
-        chosen(choice.set_params(task="classification" if table else "recordings"))
-        pooled = not table and _scores_on_training(choice, datamodule)
+        check_deployable(choice.set_params(task=side.task))
+        pooled = side.task == "recordings" and _scores_on_training(choice, datamodule)
         choice.set_params(score_on="training" if pooled else "validation")
-        if not table:
+        if side.task == "recordings":
             choice.set_candidate_params(modalities=datamodule.modality_channels)
         if pooled:   # a net's held-out predictions are those of the folds that choose its epochs
             choice.set_candidate_params(epoch_selection="folds")
-    elif not table:
-        pooled = _holds_out_its_training(model) and _validation_can_join_training(datamodule)
+    else:
+        pooled = side.pools_validation(model)
     if pooled:
         X_fit, y_fit = np.concatenate([X_train, X_val]), np.concatenate([y_train, y_val])
         fit_recordings = np.concatenate([fit_recordings, datamodule.val_window_recording])
@@ -190,19 +229,18 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
             model.set_params(checkpoint_path=str(checkpoint_folder(output_dir) / "last.pt"))
         model.set_params(resume_from=cfg.trainer.get("resume_from"))
     start, cpu_start = time.perf_counter(), time.process_time()
-    if table:
-        model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback)
-    elif pooled:
-        model.fit(X_fit, y_fit, epoch_callback=epoch_callback, groups=fit_recordings)
+    if pooled:
+        fit(model, X_fit, y_fit, epoch_callback=epoch_callback, groups=fit_recordings)
     else:  # windows of one recording stay in one fold when a net chooses its epochs on folds
-        model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback,
-                  **_recording_groups(model, datamodule))
+        fit(model, X_train, y_train, X_val, y_val, epoch_callback=epoch_callback,
+            **(_recording_groups(model, datamodule) if side.task == "recordings" else {}))
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
     if choice is not None:   # from here on the run reports and deploys the chosen candidate
-        model = chosen(choice)
+        model = choice.chosen_model_
+    offers = capabilities(model)
     if "checkpoint_path" in model.get_params():  # the deployed model refits from scratch, never from this run's files
         model.set_params(checkpoint_path=None, resume_from=None)
-    calibration = _calibrate(model, datamodule) if table else None
+    calibration = side.calibrate(model)
     proba_test = model.predict_proba(X_test)
     val_levels = getattr(datamodule, "val_levels_per_window", None)
     val_recordings = getattr(datamodule, "val_window_recording", None)
@@ -213,19 +251,16 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
                                  "among them: the model is trained on every one")
         summary["n_fit_recordings"] = int(len(np.unique(fit_recordings)))
     elif len(y_val) == 0:  # every class has one training recording: nothing could be carved
-        if getattr(model, "out_of_fold_proba_", None) is None:
+        if not offers.holds_out_training:
             raise InputError(f"{type(model).__name__} has no validation recordings to be scored on (every class has "
                              "one training recording); declare 'val' recordings in the file's split")
-        proba, y_val = model.out_of_fold_proba_, y_train  # each predicted by a fold fit that never saw it
+        proba, y_val = model.out_of_fold_proba_, y_train  # each predicted by a fit that never saw it
         val_recordings, val_levels = datamodule.train_window_recording, datamodule.train_levels_per_window
         summary["validation"] = "out-of-fold predictions on the training recordings (no validation recordings)"
     else:
         proba = model.predict_proba(X_val)
-    if table:
-        name = f"{type(model).__name__}({model.kind})"
-    else:
-        name = type(model.module_).__name__ if hasattr(model, "module_") else type(model).__name__
-    n_parameters = int(getattr(model, "n_parameters_", 0))
+    name = model_name(model)
+    n_parameters = model_size(model).get("n_parameters", 0)
     test_levels = getattr(datamodule, "test_levels_per_window", None)
     metrics = {"model": name, "n_parameters": n_parameters, "fit_time_s": fit_time_s,
                "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, "n_parameters": n_parameters},
@@ -236,22 +271,15 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
         metrics["calibration"] = calibration
     if choice is not None:
         metrics["choice"] = choice.report()
-    if hasattr(model, "best_epoch_"):  # the epoch kept (best on validation), of how many run, at what batch
+    if offers.epochs:  # the epoch kept (best on validation), of how many run, at what batch
         metrics["training"] = {"epochs_run": model.n_epochs_, "best_epoch": model.best_epoch_,
                                "batch_size": model.batch_size_, "epoch_selection": model.epoch_selection}
-        if getattr(model, "fold_best_epochs_", None) is not None:  # the folds that chose the epoch count
+        if offers.holds_out_training:  # the folds that chose the epoch count
             metrics["training"]["fold_best_epochs"] = model.fold_best_epochs_
             metrics["training"]["out_of_fold_accuracy"] = float(
                 (model.out_of_fold_proba_.argmax(axis=1) == y_fit).mean())
-    hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed}
-    if table:
-        pipeline = table_classifier_pipeline(datamodule, model)
-        val_ids, test_ids = _table_ids(datamodule, datamodule.val_idx), _table_ids(datamodule, datamodule.test_idx)
-    else:
-        hparams.update(augment=bool(datamodule.n_virtual_windows), window=str(summary["window"]))
-        pipeline = timeseries_pipeline(datamodule, model)
-        val_ids = {"recording": val_recordings}
-        test_ids = {"recording": datamodule.test_window_recording}
+    pipeline, val_ids, test_ids, more_hparams = side.evaluated(model, summary, val_recordings)
+    hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed, **more_hparams}
     return ClassificationResult(metrics, list(datamodule.classes), y_val, proba, val_ids, val_levels, y_test,
                                 proba_test, test_ids, test_levels, pipeline, hparams)
 

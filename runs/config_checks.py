@@ -3,8 +3,8 @@
 Hydra already refuses unknown groups, options and keys of the composed config. What it cannot see:
 - a key added with `+` (`+scene.sparkle=1`) that the component's constructor does not take: it
   would surface only when the component is built, after torch and friends are loaded, as a
-  TypeError. Each `_target_` of ours is looked up in its source file with `ast` (no import) and
-  the node's keys are checked against its parameters;
+  TypeError. Each `_target_` of ours is looked up in its source file with `ast` (no import:
+  runs/target_signatures.py) and the node's keys are checked against its parameters;
 - a value of the wrong type or out of range (`seed=abc`, `trainer.max_epochs=1.5`,
   `trainer.batch_size=0`): it would surface deep inside numpy or torch as a traceback. The
   settings in SETTINGS and TRAINER are checked by their rule; every parameter of one of our
@@ -23,8 +23,6 @@ import ast
 import math
 import re
 from dataclasses import dataclass
-from functools import lru_cache
-from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import InterpolationResolutionError
@@ -32,10 +30,9 @@ from omegaconf.errors import InterpolationResolutionError
 from common.errors import InputError
 from common.threads import resolve_threads
 from data.splits.settings import check_split_settings
+from runs.target_signatures import Parameter, module_constant, target_parameters, target_signature
 
-ROOT = Path(__file__).resolve().parents[1]
 HYDRA_KEYS = {"_target_", "_convert_", "_partial_", "_recursive_", "_args_"}
-NO_DEFAULT = object()   # a parameter without a default
 
 
 @dataclass(frozen=True)
@@ -126,17 +123,6 @@ FRACTION = number(0, 1, open_low=True, open_high=True)
 SHARE = number(0, 1, open_high=True)   # may be 0: that part is not held out
 
 
-@lru_cache(maxsize=None)
-def module_constant(module: str, name: str) -> tuple:
-    """A module-level tuple of strings, read from the source (the module imports torch or
-    scikit-learn; this check runs before they are loaded)."""
-    tree = ast.parse((ROOT / (module.replace(".", "/") + ".py")).read_text())
-    for node in tree.body:
-        if isinstance(node, ast.Assign) and any(isinstance(t, ast.Name) and t.id == name for t in node.targets):
-            return tuple(ast.literal_eval(node.value))
-    raise LookupError(f"{module}.{name}")
-
-
 # How nets train (configs/trainer/*.yaml): every key a trainer option may hold.
 TRAINER = {
     "max_epochs": integer(1),
@@ -182,83 +168,6 @@ PARAMETERS = {
     "window_length": integer(1, null=True), "window_step": integer(1, null=True), "trim_start": integer(0),
     "trim_end": integer(0),
 }
-
-
-# -- our targets' parameters, read from their source ------------------------------------------
-@dataclass(frozen=True)
-class Parameter:
-    name: str
-    default: object      # NO_DEFAULT, or the literal default (None when it is not a literal)
-    annotation: ast.expr | None
-
-
-@lru_cache(maxsize=None)
-def target_signature(target: str) -> tuple[tuple[Parameter, ...], bool] | None:
-    """(keyword parameters, takes **kwargs) of a class's __init__ or a function in this repo, read
-    from its source; None when they cannot be known without importing it."""
-    module, _, name = target.rpartition(".")
-    path = ROOT / (module.replace(".", "/") + ".py")
-    if not module or not path.is_file():
-        return None
-    tree = ast.parse(path.read_text())
-    for node in tree.body:
-        if isinstance(node, ast.ClassDef) and node.name == name:
-            return _class_signature(node)
-        if isinstance(node, ast.FunctionDef) and node.name == name:
-            parameters, takes_kwargs = _signature(node, skip_first=False)
-            forwarded = _forwarded_to(tree, node) if takes_kwargs else None
-            if forwarded is None:
-                return parameters, takes_kwargs
-            # a factory (data.datamodules.regression.from_table) passes its **kwargs on to the
-            # class it returns: it takes its own parameters and that class's
-            own = {p.name for p in parameters}
-            return parameters + tuple(p for p in forwarded[0] if p.name not in own), forwarded[1]
-    return None
-
-
-def _forwarded_to(tree: ast.Module, function: ast.FunctionDef):
-    """The signature of the class of ours a function's return annotation names (imported by name
-    into its module), or None."""
-    returns = function.returns
-    if not isinstance(returns, ast.Name):
-        return None
-    for node in tree.body:
-        if isinstance(node, ast.ClassDef) and node.name == returns.id:
-            return _class_signature(node)
-        if isinstance(node, ast.ImportFrom) and any(alias.name == returns.id and alias.asname is None
-                                                    for alias in node.names):
-            return target_signature(f"{node.module}.{returns.id}")
-    return None
-
-
-def _class_signature(node: ast.ClassDef):
-    init = next((f for f in node.body if isinstance(f, ast.FunctionDef) and f.name == "__init__"), None)
-    return _signature(init, skip_first=True) if init else None
-
-
-def _signature(function: ast.FunctionDef, skip_first: bool):
-    arguments = function.args
-    positional = arguments.posonlyargs + arguments.args
-    defaults = [NO_DEFAULT] * (len(positional) - len(arguments.defaults)) + list(arguments.defaults)
-    pairs = list(zip(positional, defaults)) + [(a, NO_DEFAULT if d is None else d)
-                                                for a, d in zip(arguments.kwonlyargs, arguments.kw_defaults)]
-    parameters = tuple(Parameter(a.arg, d if d is NO_DEFAULT else _literal(d), a.annotation) for a, d in pairs)
-    return parameters[1:] if skip_first else parameters, arguments.kwarg is not None
-
-
-def _literal(node: ast.expr):
-    try:
-        return ast.literal_eval(node)
-    except (ValueError, TypeError, SyntaxError):  # a name or an expression: its type is unknown here
-        return None
-
-
-def target_parameters(target: str) -> tuple[str, ...] | None:
-    """The keyword parameters of a target of ours; None when unknown or it takes **kwargs."""
-    signature = target_signature(target)
-    if signature is None or signature[1]:
-        return None
-    return tuple(p.name for p in signature[0])
 
 
 ANNOTATION_TYPES = {"int": {"integer"}, "float": {"number"}, "bool": {"bool"}, "str": {"string"},

@@ -10,12 +10,13 @@ from pathlib import Path
 import numpy as np
 from hydra.utils import instantiate
 from omegaconf import DictConfig, OmegaConf
+from sklearn.base import is_classifier
 
 from common.errors import InputError
 from common.progress import phase, progress
 from data.units import clip_columns
+from models.capabilities import capabilities, fit, model_name, model_size
 from models.deployable import RegressionPipeline, regression_pipeline
-from models.validation_choice import ValidationChoice
 from runs.report.analysis import edge_vs_centre, feature_ablation, identifiability_map, interval_report
 from runs.report.metrics import regression_metrics
 from runs.report.metrics_file import mean_sd
@@ -23,7 +24,6 @@ from runs.report.regression_report import write_regression_report
 
 log = logging.getLogger(__name__)
 SHEET_TARGETS = {"x_mm", "y_mm", "depth_mm", "pressure_pa"}
-CLASSIFIER = "models.classic_classifiers.TableClassifier"   # for classification tables (runs/classification.py)
 
 
 @dataclass
@@ -41,13 +41,6 @@ class RegressionResult:
     hparams: dict = field(default_factory=dict)
 
 
-def _model_size(model) -> dict:
-    for attribute in ("n_parameters_", "n_nodes_"):
-        if hasattr(model, attribute):
-            return {attribute.rstrip("_"): int(getattr(model, attribute))}
-    return {}
-
-
 def _selection_report(model, targets) -> dict:
     report = {"candidates": model.names_, "weights_rule": model.weights, "mode": model.mode,
               "per_target": model.per_target,
@@ -59,51 +52,44 @@ def _selection_report(model, targets) -> dict:
               # validation, so that candidate alone serves the target
               "stacking_fallback_targets": [targets[k] for k in model.stacking_fallback_targets_],
               "fit_time_s": model.fit_time_s_}
-    folds = {n: m.fold_fit_time_s_ for n, m in model.models_.items() if hasattr(m, "fold_fit_time_s_")}
+    folds = {n: m.fold_fit_time_s_ for n, m in model.models_.items() if capabilities(m).fold_costs}
     if folds:
         report["fold_fit_time_s"] = folds
     return report
 
 
+def _fold_members(model) -> dict:
+    """The models fitted K times: a blend's K-fold candidates, or the model itself."""
+    members = model.models_ if capabilities(model).weighs_candidates else {"model": model}
+    return {n: m for n, m in members.items() if capabilities(m).fold_costs}
+
+
 def _fold_costs(model) -> dict:
     """Fit wall and CPU time of every fold model of a (weighted) K-fold blend."""
-    blends = model.models_ if hasattr(model, "weights_") else {"model": model}
     folds = {n: {"fit_time_s": m.fold_fit_time_s_, "fit_cpu_time_s": m.fold_fit_cpu_time_s_}
-             for n, m in blends.items() if hasattr(m, "fold_fit_time_s_")}
+             for n, m in _fold_members(model).items()}
     return {"folds": folds} if folds else {}
 
 
 def _fold_warnings(model) -> list[str]:
-    blends = model.models_.values() if hasattr(model, "weights_") else [model]
-    return sorted({m.fold_warning_ for m in blends if getattr(m, "fold_warning_", None)})
-
-
-def _importances(model):
-    if hasattr(model, "selected_tree_importances"):
-        return model.selected_tree_importances()
-    if hasattr(model, "feature_importances"):
-        values = model.feature_importances()
-        return None if values is None else (type(model).__name__, values)
-    return None
+    return sorted({m.fold_warning_ for m in _fold_members(model).values() if m.fold_warning_})
 
 
 def _ablation_estimator(model, node):
     """The selected candidate, unblended, so the ablation costs one fit per feature group; `node`
     is the fitted model's config."""
-    if hasattr(model, "selected_"):
+    if capabilities(model).weighs_candidates:
         name = model.selected_()
         candidate = node.candidates[name]
         return name, instantiate(candidate.get("estimator", candidate))
     return type(model).__name__, instantiate(node)
 
 
-def chosen(choice: ValidationChoice):
-    """The candidate a fitted choice deploys (None before fitting); a choice that may pick a
-    mixture of candidates is refused, before any fitting when called then."""
+def check_deployable(choice) -> None:
+    """A choice that may pick a mixture of candidates is refused before any fitting."""
     if choice.ensemble:
         raise InputError("model.ensemble=true: a mixture of candidates is not exported as one ONNX graph yet; "
                          "set model.ensemble=false")
-    return choice.chosen_model_ if hasattr(choice, "chosen_") else None
 
 
 def _hparams(cfg: DictConfig) -> dict:
@@ -121,22 +107,24 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
     analysis = cfg.get("analysis", {})
     (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     targets = datamodule.target_names
-    if cfg.model.get("_target_") == CLASSIFIER:
-        raise InputError(f"model.kind={cfg.model.kind} classifies, but {datamodule.table.source_name}'s target(s) "
+    model, node = instantiate(cfg.model), cfg.model
+    if is_classifier(model):
+        what = f"model.kind={cfg.model.kind}" if "kind" in cfg.model else model_name(model)
+        raise InputError(f"{what} classifies, but {datamodule.table.source_name}'s target(s) "
                          f"{', '.join(targets)} are quantities (regression): choose a regression model, or set "
                          "data.task=classification for a class label")
-    model, node = instantiate(cfg.model), cfg.model
-    choice = model if isinstance(model, ValidationChoice) else None
+    choice = model if capabilities(model).chooses else None
     if choice is not None:
         choice.set_params(task="regression")
-        chosen(choice)
+        check_deployable(choice)
     groups = datamodule.table.groups[datamodule.train_idx] if datamodule.split in ("grouped", "predefined") else None
 
     start, cpu_start = time.perf_counter(), time.process_time()
-    model.fit(X_train, y_train, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
+    fit(model, X_train, y_train, X_val, y_val, epoch_callback=epoch_callback, groups=groups)
     fit_time_s, fit_cpu_time_s = time.perf_counter() - start, time.process_time() - cpu_start
     if choice is not None:   # from here on the run reports and deploys the chosen candidate
-        model, node = chosen(choice), cfg.model.candidates.regression[choice.chosen_]
+        model, node = choice.chosen_model_, cfg.model.candidates.regression[choice.chosen_]
+    offers = capabilities(model)
 
     def predict(X):
         """(n, n_targets) even for one target (scikit-learn returns a vector), within each target's
@@ -146,12 +134,12 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
 
     pred_test = predict(X_test)
     metrics = {
-        "model": model.__class__.__name__,
+        "model": model_name(model),
         "val": regression_metrics(y_val, predict(X_val), targets),
         "test": regression_metrics(y_test, pred_test, targets),
         "fit_time_s": fit_time_s,
-        **_model_size(model),
-        "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, **_model_size(model),
+        **model_size(model),
+        "cost": {"fit_time_s": fit_time_s, "fit_cpu_time_s": fit_cpu_time_s, **model_size(model),
                  **_fold_costs(model)},
         "data": datamodule.summary(),
     }
@@ -165,9 +153,9 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
     if choice is not None:
         result.hparams["model.chosen"] = choice.chosen_
 
-    if hasattr(model, "weights_"):
+    if offers.weighs_candidates:
         metrics["selection"] = _selection_report(model, targets)
-    if hasattr(model, "predict_std"):
+    if offers.intervals:
         X_cal, y_cal = datamodule.calibration
         model.calibrate(X_cal, y_cal)
         metrics["uncertainty"], mean, sigma = interval_report(model, X_test, y_test, targets)
@@ -184,7 +172,7 @@ def fit_and_evaluate(cfg: DictConfig, datamodule, epoch_callback=None) -> Regres
             ident["position_sigma_edge_vs_centre_mm"] = edge_vs_centre(xy, position_sigma)
             metrics["identifiability"] = ident
 
-    result.importances = _importances(model)
+    result.importances = model.importances() if offers.importances else None
     if result.importances is not None:
         values = result.importances[1]
         top = np.argsort(values)[::-1][:10]
@@ -217,7 +205,7 @@ def split_spread(node, datamodule, first: dict, splits: int) -> dict:
         other = datamodule.resplit(datamodule.seed + k)
         groups = other.table.groups[other.train_idx] if other.split == "grouped" else None
         model = instantiate(node)
-        model.fit(*other.train, *other.val, groups=groups)
+        fit(model, *other.train, *other.val, groups=groups)
         runs.append({part: regression_metrics(y, clip_columns(model.predict(X), other.target_names), other.target_names)
                      for part, (X, y) in (("val", other.val), ("test", other.test))})
         seeds.append(other.seed)

@@ -10,7 +10,7 @@ run's work and writes its own tables and figures; its metrics are written here l
 Studies leave no pipeline, so nothing is exported for them.
 
 Every artefact has one writer, called once: figures, predictions and pipeline.npz by the
-report (runs/report/), model.onnx by export/run_export.write_onnx, metrics.json by
+report (runs/report/), model.onnx by export/pipelines.write_onnx, metrics.json by
 runs/report/metrics_file.write_metrics, TensorBoard through the one logger opened here.
 train.py calls `run(cfg, output_dir, config_hash)`; tests call it with a composed config.
 """
@@ -27,7 +27,8 @@ from omegaconf import DictConfig
 from common.distributed import launched_world_size
 from common.progress import phase
 from export.latency import log_costs, measure
-from export.run_export import write_onnx
+from export.pipelines import write_onnx
+from models.capabilities import capabilities
 from runs.classification import run_classification
 from runs.config_checks import check_config
 from runs.regression import run_regression
@@ -60,7 +61,9 @@ def run(cfg: DictConfig, output_dir: str | Path, config_hash: str = "unknown") -
             fit_and_report = run_classification if task == "classification" else run_regression
             metrics, pipeline = fit_and_report(cfg, output_dir, datamodule, logger)
             model_path = None
-            if cfg.export.enabled:
+            if cfg.export.enabled and not capabilities(pipeline.model).onnx_exportable:
+                log.warning("%s declares no ONNX export: model.onnx is not written", type(pipeline.model).__name__)
+            elif cfg.export.enabled:
                 with phase("ONNX export"):
                     model_path = write_onnx(pipeline, output_dir / cfg.export.file, cfg.export.opset, config_hash)
             if model_path is not None or cfg.cost.measure_latency:

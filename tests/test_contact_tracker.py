@@ -205,7 +205,9 @@ def window_pipeline(kind, groups=("raw",), targets=("force_n",), seed=0):
     mean, scale = features.mean(axis=0), features.std(axis=0)
     model = ClassicRegressor(kind=kind).fit((features - mean) / scale, y)
     names = window_channel_names()
-    return RegressionPipeline(names, list(targets), list(groups), feature_names(names, list(groups)), mean, scale, model)
+    return RegressionPipeline(channel_names=names, target_names=list(targets), feature_groups=list(groups),
+                              feature_names=feature_names(names, list(groups)), scaler_mean=mean, scaler_scale=scale,
+                              model=model)
 
 
 @pytest.mark.parametrize("kind, groups, folded", [

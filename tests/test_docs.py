@@ -59,7 +59,8 @@ def heading_anchors(page: Path) -> set[str]:
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: p.name)
 def test_every_repository_path_a_page_names_exists(page):
-    missing = sorted(path for path in repository_paths(page.read_text()) if not exists(path))
+    text = re.sub(r"<!--.*?-->", "", page.read_text())       # a generated block's marker names a table, not a path
+    missing = sorted(path for path in repository_paths(text) if not exists(path))
     assert not missing, f"{page.relative_to(ROOT)} names paths that do not exist: {missing}"
 
 

@@ -1,19 +1,18 @@
-"""The generalised sheet solver (data/physics/sheet_conduction.py) checked against independent
-answers: the full sparse solve, reciprocity, an analytic uniform sheet, finite differences."""
+"""The generalised sheet solver (data/physics/sheet_conduction.py), the ERT readings and Jacobian
+(data/ert/) checked against independent answers: the full sparse solve, reciprocity, an analytic
+uniform sheet, finite differences."""
 import numpy as np
 import pytest
 import scipy.sparse as sp
 from scipy.sparse.linalg import spsolve
 
 from common.errors import InputError
+from data.ert.cells import patch_weights
+from data.ert.jacobian import channel_jacobian, transfer_resistance_jacobian
+from data.ert.protocol import injection_pairs, measurement_pairs
+from data.ert.readings import four_terminal_matrix, four_terminal_voltage_v
 from data.physics.press_update import PatchUpdateSolver
-from data.physics.sheet_conduction import (
-    SheetGrid,
-    SheetSolver,
-    four_terminal_matrix,
-    four_terminal_voltage_v,
-)
-from data.scenes.ert import injection_pairs, measurement_pairs, patch_weights
+from data.physics.sheet_conduction import SheetGrid, SheetSolver
 
 INTERNAL = np.array([[0, 40], [0, 80], [40, 120], [80, 120], [120, 80], [120, 40], [80, 0], [40, 0],
                      [40, 40], [80, 80], [40, 80]], dtype=float)
@@ -114,12 +113,10 @@ def test_jacobian_matches_finite_differences():
     g = grid()
     solver = SheetSolver(g)
     base = 5e-5 * np.random.default_rng(3).uniform(0.8, 1.2, g.n_nodes ** 2)
-    fast = PatchUpdateSolver(solver, base)
     weight = patch_weights(g.node_xy_mm, g.side_mm, 20.0)
-    dz = fast.transfer_resistance_jacobian(weight)
+    dz = transfer_resistance_jacobian(solver, base, weight)
     inj, meas = injection_pairs("all", len(INTERNAL)), measurement_pairs("successive", len(INTERNAL))
-    to_channels = four_terminal_matrix(inj, meas, len(INTERNAL))
-    jacobian = (to_channels @ dz.reshape(len(dz), -1).T)
+    jacobian = channel_jacobian(dz, inj, meas, 1.0)
     z0 = solver.transfer_resistance(base)
     for k in (0, 7, 20, 35):
         step = 1e-6

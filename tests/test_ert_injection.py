@@ -6,9 +6,8 @@ from data.physics.optimal_injection import (
     perturbation_operator,
     recruit_pairs,
 )
-from data.physics.press_update import PatchUpdateSolver
+from data.ert.jacobian import cell_jacobian
 from data.physics.sheet_conduction import SheetGrid, SheetSolver
-from data.scenes.ert import patch_weights
 
 RING = [[20, 120], [60, 120], [100, 120], [120, 100], [120, 60], [120, 20], [100, 0], [60, 0], [20, 0],
         [0, 20], [0, 60], [0, 100]]
@@ -16,8 +15,7 @@ RING = [[20, 120], [60, 120], [100, 120], [120, 100], [120, 60], [120, 20], [100
 
 def operator(electrodes=RING):
     grid = SheetGrid(120.0, 25, np.asarray(electrodes, dtype=float), 0.0)
-    solver = PatchUpdateSolver(SheetSolver(grid), 5e-5)
-    return perturbation_operator(solver.transfer_resistance_jacobian(patch_weights(grid.node_xy_mm, 120.0, 20.0)))
+    return perturbation_operator(cell_jacobian(SheetSolver(grid), 5e-5, 120.0, 20.0))
 
 
 def test_error_falls_monotonically_and_every_pair_is_recruited_once():

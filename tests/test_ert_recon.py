@@ -6,13 +6,13 @@ import onnxruntime as ort
 import pytest
 
 from common.errors import InputError
-from data.physics.sheet_conduction import four_terminal_voltage_v
+from data.ert.readings import four_terminal_voltage_v, transfer_basis, unique_transfer_entries
 from data.scenes.ert import ERTScene
 from export.reconstruction_graphs import linear_image_to_onnx, predict_with_onnx
 from models.ert.gauss_newton import GaussNewtonReconstruction
 from models.ert.greit import GreitReconstruction
 from models.ert.image_readout import thresholded_centroid
-from models.ert.readings import pixel_centres_mm, transfer_basis, unique_transfer_entries
+from models.ert.pixel_grid import pixel_centres_mm
 
 BOUNDARY = [[15, 120], [50, 120], [85, 120], [120, 85], [120, 50], [120, 15], [85, 0], [50, 0], [15, 0],
             [0, 15], [0, 50], [0, 85]]
@@ -140,7 +140,7 @@ def test_hyper_parameters_are_chosen_on_the_calibration_recording_only(compose_c
     monkeypatch.setattr(GaussNewtonReconstruction, "fit", spy)
     cfg = compose_config(["experiment=ert_localisation", *TINY])
     calibration = {"grid_points_per_side": 4, "n_force_levels": 3, "force_range_n": [2.0, 15.0]}
-    frame, extra = single_point_study(cfg, tmp_path, seeds=(0,), calibration=calibration, n_blank=5,
+    frame, extra = single_point_study(cfg, seeds=(0,), calibration=calibration, n_blank=5,
                                   reconstruction={"kind": "gauss_newton", "pixels_per_side": 99,   # Tikhonov's: unused
                                                   "gauss_newton": {"pixels_per_side": 8,
                                                                    "lambdas_relative": [1e-3, 1e-2]}})
@@ -169,7 +169,8 @@ def test_learned_inverse_trains_on_other_sensors_and_is_scored_on_the_sensor_und
     prediction = model.predict(cal.channels)
     assert prediction.shape == (len(cal.channels), 3) and np.isfinite(prediction).all()
     with pytest.raises(InputError, match="among the training sensors"):
-        fit_reconstruction("greit", cfg, 10_001, cal.channels, cal.targets, params | {"training_seed": 10_000})
+        greit = {k: v for k, v in params.items() if k != "n_estimators"}      # the regressor's: not GREIT's
+        fit_reconstruction("greit", cfg, 10_001, cal.channels, cal.targets, greit | {"training_seed": 10_000})
 
 
 def test_learned_study_trains_on_another_sensor_instance(compose_config, tmp_path):

@@ -7,7 +7,7 @@ import pytest
 from common.errors import InputError
 from data.scenes.ert import ERTScene
 from export.reconstruction_graphs import predict_with_onnx, tikhonov_to_onnx
-from models.tikhonov_reconstruction import (
+from models.ert.tikhonov import (
     TikhonovReconstruction,
     bilinear_matrix,
     wiener_kernel,

@@ -7,9 +7,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from common.errors import InputError
-from data.scenes.ert import ERTScene, injection_pairs
+from data.ert.protocol import injection_pairs
+from data.scenes.ert import ERTScene
 from data.scenes.ert_effects import EFFECTS
-from models.tikhonov_reconstruction import TikhonovReconstruction
+from models.ert.tikhonov import TikhonovReconstruction
 
 BOUNDARY = [[20, 120], [60, 120], [100, 120], [120, 100], [120, 60], [120, 20], [100, 0], [60, 0], [20, 0],
             [0, 20], [0, 60], [0, 100]]

@@ -1,5 +1,5 @@
 """The ERT scene's fast forward paths equal the plain computations to rounding: the patch solver
-(Woodbury update with eliminated 3 x 3 cells, data/physics/sheet_conduction.py) against a full
+(Woodbury update with eliminated 3 x 3 cells, data/physics/press_update.py) against a full
 sparse solve per press, on the scenes' own presses (both electrode layouts, patch-wide and
 local contact), the four-terminal readings against the superposition formula term by term, and
 SensorTable's one-pass check of its values against the column-by-column one it stands for."""
@@ -10,10 +10,12 @@ from hydra.utils import instantiate
 from omegaconf import OmegaConf
 
 from common.errors import InputError
+from data.ert.cells import patch_weights
+from data.ert.protocol import injection_pairs, measurement_pairs
+from data.ert.readings import four_terminal_voltage_v
 from data.physics.press_update import PatchUpdateSolver
-from data.physics.sheet_conduction import SheetGrid, SheetSolver, four_terminal_voltage_v
+from data.physics.sheet_conduction import SheetGrid, SheetSolver
 from data.readers.table_reader import check_model_block, check_model_values
-from data.scenes.ert import injection_pairs, measurement_pairs, patch_weights
 
 
 @pytest.mark.parametrize("name", ["ert_boundary", "ert_internal", "ert_physical_boundary", "ert_physical_internal"])

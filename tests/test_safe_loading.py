@@ -22,7 +22,7 @@ from data.readers.contact_streams import load_frames
 from data.readers.recording_reader import load_npz
 from data.readers.table_reader import read_table_file
 from export.run_export import export_run
-from models import fitted_state
+from models import storable
 from models.classic_regressors import ClassicRegressor
 from models.deployable import PIPELINE_FILE, RegressionPipeline, TimeSeriesPipeline, load_pipeline, save_pipeline
 from models.fitted_state import FORMAT, VERSION, load_fitted, save_fitted
@@ -102,10 +102,13 @@ def test_the_crafted_files_would_run_code_if_unpickled_or_allowed(tmp_path, mark
     torch.load(tmp_path / "last.pt", weights_only=False)
     assert marker.exists()
     marker.unlink()
-    for names in ("ALLOWED_CLASSES", "CALLED_CLASSES"):
-        monkeypatch.setattr(fitted_state, names, getattr(fitted_state, names) | {"os.system"})
-    (tmp_path / "system.npz").write_bytes(files["os.system"])
-    load_fitted(tmp_path / "system.npz")
+    monkeypatch.setitem(storable.STORABLE, "os.system", os.system)
+    storable.CALLED.add("os.system")
+    try:
+        (tmp_path / "system.npz").write_bytes(files["os.system"])
+        load_fitted(tmp_path / "system.npz")
+    finally:
+        storable.CALLED.discard("os.system")
     assert marker.exists()
 
 
@@ -164,13 +167,23 @@ def test_a_file_that_is_not_a_saved_pipeline_is_one_line(tmp_path, damage, words
     assert words in str(error.value) and str(path) in str(error.value) and one_line(str(error.value))
 
 
+@pytest.mark.parametrize("name", ["models.capabilities.Capabilities", "models.no_such_module.Model",
+                                  "models..deployable.RegressionPipeline", "sklearn.svm._classes.NuSVR"])
+def test_a_class_that_did_not_register_as_storable_is_refused(tmp_path, name):
+    """Only registered classes are built: one of our modules that holds no registered class of
+    that name, a module that does not exist, a malformed name, a library class nobody registered."""
+    path = fitted_document(tmp_path / PIPELINE_FILE, {"object": name, "state": {"dict": {}}})
+    with pytest.raises(InputError, match="not on the list of classes .*storable-class registry"):
+        load_pipeline(path)
+
+
 def test_saving_refuses_code_and_unlisted_classes_naming_where_they_sit(tmp_path):
     pipeline = regression_pipeline(TreeRegressor("decision_tree", max_depth=3).fit(*regression_data()))
     pipeline.description["hook"] = lambda x: x
     with pytest.raises(TypeError, match=r"RegressionPipeline\.description\.hook: .*is code, not data"):
         save_pipeline(pipeline, tmp_path / PIPELINE_FILE)
     pipeline.description["hook"] = Path("/tmp")  # data, but of a class nobody listed
-    with pytest.raises(TypeError, match=r"description\.hook: class pathlib\.\w*Path is not on the allow-list"):
+    with pytest.raises(TypeError, match=r"description\.hook: class pathlib\.\w*Path is not in the storable-class registry"):
         save_pipeline(pipeline, tmp_path / PIPELINE_FILE)
     assert not (tmp_path / PIPELINE_FILE).exists()
 
@@ -274,8 +287,10 @@ def regression_pipeline(model) -> RegressionPipeline:
     readings, y = regression_data()
     raw = readings * 1e3 + 17.0
     normalisation = MinMaxScaling.fit(raw, [f"r_{k}" for k in range(4)])
-    pipeline = RegressionPipeline(normalisation.raw_channels, ["a_mm", "b_mm"], ["raw"], ["r_0", "r_1", "r_2", "r_3"],
-                                  np.zeros(4), np.ones(4), model, {"source": "test"}, raw[:8], normalisation)
+    pipeline = RegressionPipeline(channel_names=normalisation.raw_channels, target_names=["a_mm", "b_mm"],
+                                  feature_groups=["raw"], feature_names=["r_0", "r_1", "r_2", "r_3"],
+                                  scaler_mean=np.zeros(4), scaler_scale=np.ones(4), model=model,
+                                  description={"source": "test"}, examples=raw[:8], normalisation=normalisation)
     X = pipeline.features(raw)
     model.fit(X, y)
     if hasattr(model, "calibrate"):

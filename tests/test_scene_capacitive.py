@@ -13,6 +13,7 @@ from omegaconf import OmegaConf
 
 import data.scenes.capacitive6x6 as capacitive
 from common.errors import InputError
+from data.physics.hyperelastic_compression import gent_stretch, neo_hookean_stretch
 from data.preprocessing.contact_windows import window_channel_names, window_indices, windows_around_peaks
 from data.readers.contact_streams import TRUTH_COLUMNS, ContactStream, load_frames, save_frames_csv
 from data.scenes.capacitive6x6 import Capacitive6x6Scene, channel_names
@@ -92,9 +93,9 @@ def test_stiffer_spacer_reads_less():
 
 def test_gent_spacer_is_neo_hookean_without_a_limit_and_stiffens_as_it_closes():
     stress = np.array([0.0, 1e3, 3e4, 1e5, 1e6])
-    neo = capacitive.neo_hookean_stretch(stress, 3.3e5)
-    assert np.allclose(capacitive.gent_stretch(stress, 3.3e5, 1e9), neo, atol=1e-8)
-    gent = capacitive.gent_stretch(stress, 3.3e5, 0.2)
+    neo = neo_hookean_stretch(stress, 3.3e5)
+    assert np.allclose(gent_stretch(stress, 3.3e5, 1e9), neo, atol=1e-8)
+    gent = gent_stretch(stress, 3.3e5, 0.2)
     assert gent[0] == 1.0 and np.all(np.diff(gent) < 0)                  # closes further under more stress
     assert np.all(gent[1:] > neo[1:])                                     # but less than neo-Hookean
     assert abs(1 - gent[1] / neo[1]) < 1e-4                               # the same at small strain

@@ -170,13 +170,11 @@ def test_impossible_parameters_are_one_line_errors(effects):
 # -- SVD-optimal injection: scores that do not depend on the SVD's basis -------------------------
 def test_leading_subspace_scores_tie_whole_symmetry_orbits():
     from data.physics.optimal_injection import perturbation_operator, recruit_pairs
-    from data.physics.press_update import PatchUpdateSolver
-    from data.scenes.ert import patch_weights
+    from data.ert.jacobian import cell_jacobian
     ring = np.array([[20, 120], [60, 120], [100, 120], [120, 100], [120, 60], [120, 20], [100, 0], [60, 0], [20, 0],
                      [0, 20], [0, 60], [0, 100]], dtype=float)
     grid = SheetGrid(120.0, 25, ring, 0.0)
-    solver = PatchUpdateSolver(SheetSolver(grid), 5e-5)
-    op = perturbation_operator(solver.transfer_resistance_jacobian(patch_weights(grid.node_xy_mm, 120.0, 20.0)))
+    op = perturbation_operator(cell_jacobian(SheetSolver(grid), 5e-5, 120.0, 20.0))
     index = {tuple(p): k for k, p in enumerate(ring)}
     symmetries = [lambda p: p, lambda p: [120 - p[0], p[1]], lambda p: [p[0], 120 - p[1]], lambda p: [p[1], p[0]]]
 

@@ -13,8 +13,8 @@ from data.physics.contact_mechanics import (
     bonded_layer_deflection_mm,
     bonded_layer_stiffening,
     flat_punch_force_n,
-    neo_hookean_stiffening,
 )
+from data.physics.hyperelastic_compression import neo_hookean_stiffening
 from data.scenes import rubber12, rubber12_effects
 from data.scenes.rubber12 import Rubber12Scene, electrode_positions_mm, measurement_pairs
 from data.scenes.rubber12_effects import FIELD_EFFECTS

@@ -18,11 +18,13 @@ from runs.run import run
 
 ROOT = Path(__file__).resolve().parents[1]
 CLASSIFIERS = {"prcnn", "rescnn", "inceptiontime", "lstm_fcn",   # tested in test_tsc_models.py
-               "inceptiontime_ensemble"}                          # its averaging in test_net_recipes.py
+               "inceptiontime_ensemble",                          # its averaging in test_net_recipes.py
+               "fcn"}                                             # a new module by one file: test_bring_your_own.py
 ROCKET_CLASSIFIERS = {"minirocket", "hydra_minirocket"}           # tested in test_rocket_runs.py, test_rocket_hydra.py
 TABLE_CLASSIFIERS = {"mlp", "logistic_regression"}                # tested in test_table_classification.py
+LIBRARY_CLASSIFIERS = {"gradient_boosting"}                       # by its YAML alone: test_bring_your_own.py
 MODELS = sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml")
-                if p.stem not in CLASSIFIERS | ROCKET_CLASSIFIERS | TABLE_CLASSIFIERS)
+                if p.stem not in CLASSIFIERS | ROCKET_CLASSIFIERS | TABLE_CLASSIFIERS | LIBRARY_CLASSIFIERS)
 # common/atomic.py renders each output into tempfile.mkstemp(prefix=f".{name}.", suffix=suffix) in
 # the output's folder: ".metrics.json.k2x9_a1b.json", ".parity.png.q0w8r7t6.png". A hidden
 # name, then more name, a dot and more: what a crashed or forgotten atomic write leaves behind.
@@ -45,6 +47,8 @@ def test_every_model_config_is_tested(compose_config):
         assert target.endswith("TimeSeriesClassifier") == (name in CLASSIFIERS), (name, target)
         assert target.endswith("RocketClassifier") == (name in ROCKET_CLASSIFIERS), (name, target)
         assert target.endswith("TableClassifier") == (name in TABLE_CLASSIFIERS), (name, target)
+        assert target.endswith("Classifier") == (name in CLASSIFIERS | ROCKET_CLASSIFIERS | TABLE_CLASSIFIERS
+                                                  | LIBRARY_CLASSIFIERS), (name, target)
     assert {"resmlp", "random_forest", "extra_trees", "decision_tree", "blend"} <= set(MODELS)
 
 

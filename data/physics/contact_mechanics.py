@@ -118,18 +118,6 @@ def bonded_layer_stiffening(radius_mm: float, thickness_mm: float) -> float:
     return float(_bonded_layer_profile(float(radius_mm), float(thickness_mm))[2])
 
 
-def neo_hookean_stiffening(strain):
-    """Secant stiffening of a neo-Hookean solid in uniaxial compression over its small-strain
-    modulus: nominal stress (E/3)(lambda - lambda^-2), lambda = 1 - strain (Treloar, *The
-    Physics of Rubber Elasticity*, 3rd ed. 1975, ch. 5; physics notes), divided by E * strain.
-    1 at zero strain, 1.05 at 5 %, 1.17 at 15 %, 2.33 at 50 %."""
-    e = np.clip(np.asarray(strain, dtype=float), 0.0, 0.95)
-    stretch = 1.0 - e
-    small = e < 1e-6
-    ratio = (stretch**-2 - stretch) / (3.0 * np.where(small, 1.0, e))
-    return np.where(small, 1.0, ratio)
-
-
 def standard_linear_solid_relaxation(time_s, relaxed_fraction, time_constant_s):
     """Stress relaxation function of a standard linear solid normalised to 1 at t = 0:
     G(t)/G(0) = 1 - f (1 - exp(-t / tau)) (Zener 1948; Findley, Lai & Onaran, *Creep and

@@ -209,33 +209,6 @@ class PatchUpdateSolver:
             out[part] -= np.swapaxes(P, 1, 2) @ np.linalg.solve(M, dL @ P)
         return out
 
-    def transfer_resistance_jacobian(self, node_to_parameter: np.ndarray) -> np.ndarray:
-        """dZ / d theta at the base map, shape (n_parameters, n_electrodes, n_electrodes), where
-        parameter k scales node conductances by (1 + theta_k * node_to_parameter[:, k]).
-
-        Adjoint (Geselowitz) sensitivity: for edge conductance g_e between nodes p and q,
-        dZ_ij/dg_e = -(u_i(p) - u_i(q)) (u_j(p) - u_j(q)), u_i the potentials for a unit current
-        into electrode i (Holder 2005, ch. 1; Polydorides & Lionheart, Meas. Sci. Technol. 13,
-        2002). The harmonic-mean edge conductance w 2 g_p g_q / (g_p + g_q) has
-        d/d g_p = w 2 g_q^2 / (g_p + g_q)^2, which the chain rule carries to theta.
-        """
-        s, m = self.solver, self.solver.n_electrodes - 1
-        potentials = np.zeros((self._n, m))                       # ground row is zero
-        potentials[:-1] = s.unit_potentials(self._base_nodes)
-        a, b = self._ends[:, 0], self._ends[:, 1]
-        drop = potentials[a] - potentials[b]                      # (n_edges, m)
-        gp, gq = self._base_nodes[s.edges[:, 0]], self._base_nodes[s.edges[:, 1]]
-        dg_dgp = s.edge_weight * 2.0 * gq ** 2 / (gp + gq) ** 2
-        dg_dgq = s.edge_weight * 2.0 * gp ** 2 / (gp + gq) ** 2
-        weight = np.asarray(node_to_parameter, dtype=float)
-        d_edge = (dg_dgp * gp)[:, None] * weight[s.edges[:, 0]] + (dg_dgq * gq)[:, None] * weight[s.edges[:, 1]]
-        i, j = np.triu_indices(m)                                 # dZ is symmetric: one triangle
-        upper = -(d_edge.T @ (drop[:, i] * drop[:, j]))
-        dz = np.zeros((weight.shape[1], m + 1, m + 1))
-        dz[:, i, j] = upper
-        dz[:, j, i] = upper
-        return dz
-
 
 class NearFarSolver:
     """Transfer resistances for presses whose change is large near the probe and small but wide
@@ -246,8 +219,8 @@ class NearFarSolver:
     form the near field and go through the exact Woodbury update; every other changed edge
     enters to first order (`near_tolerance` 0: every change exactly, PatchUpdateSolver's path),
     dZ = -sum_e dg_e (u(p_e) - u(q_e)) (u(p_e) - u(q_e))^T with the resting sheet's potentials u
-    (the adjoint sensitivity, Geselowitz; Holder 2005 ch. 1; as in
-    PatchUpdateSolver.transfer_resistance_jacobian). The error is second order in the far-field
+    (the adjoint sensitivity, Geselowitz; Holder 2005 ch. 1; as in the ERT skin's Jacobian,
+    data/ert/jacobian.py). The error is second order in the far-field
     change plus the near field's effect on the far field's sensitivity; it is measured against
     the full sparse solve in tests/test_scene_contract.py (under 1 % of a press's signal at 0.01).
     """

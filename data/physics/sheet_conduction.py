@@ -10,9 +10,9 @@ Solving the grounded system once for a unit current into each electrode gives th
 transfer-resistance matrix Z (ohms); any two-terminal reading between electrodes i and j
 is then R_ij = Z_ii + Z_jj - 2 Z_ij, and any four-terminal reading (current I into a, out of
 b; voltage between c and d) is V = I (Z_ca - Z_cb - Z_da + Z_db) by superposition (Holder,
-*Electrical Impedance Tomography*, 2005, ch. 1; seed 002 eq. 2), so every injection and
-measurement pattern costs one factorisation. Z is symmetric (the Laplacian is), which is the
-reciprocity theorem V_ab,cd = V_cd,ab.
+*Electrical Impedance Tomography*, 2005, ch. 1; the ERT skin's four-terminal readings are
+data/ert/readings.py), so every injection and measurement pattern costs one factorisation. Z is
+symmetric (the Laplacian is), which is the reciprocity theorem V_ab,cd = V_cd,ab.
 
 Electrodes: one whose centre lies on the sheet's border covers the border nodes within half its
 width (rubber12's edge electrodes); one inside the sheet covers every node within half its
@@ -161,35 +161,3 @@ def pair_resistance_ohm(z: np.ndarray, pairs: np.ndarray) -> np.ndarray:
     shape (..., n_electrodes, n_electrodes): R_ij = Z_ii + Z_jj - 2 Z_ij."""
     i, j = pairs[:, 0], pairs[:, 1]
     return z[..., i, i] + z[..., j, j] - 2.0 * z[..., i, j]
-
-
-def four_terminal_voltage_v(z: np.ndarray, injection_pairs: np.ndarray, measurement_pairs: np.ndarray,
-                            current_a: float = 1.0) -> np.ndarray:
-    """Voltages V_c - V_d for current `current_a` into a and out of b, from transfer matrices Z of
-    shape (..., n_electrodes, n_electrodes): V = I (Z_ca - Z_cb - Z_da + Z_db) by superposition.
-
-    Returns shape (..., n_injections, n_measurements), injection-major (seed 002 eq. 2 with
-    pairwise patterns P_j = e_a - e_b and M_i = e_c - e_d)."""
-    z = np.asarray(z, dtype=float)
-    # Column differences first (the potential each injection's terminal sets up between c and d),
-    # then the injection pairs as a +-1 matrix product, which BLAS forms in the output's
-    # injection-major layout: v[..., k, i] = y[..., a_k, i] - y[..., b_k, i].
-    y = np.swapaxes(z[..., measurement_pairs[:, 0], :] - z[..., measurement_pairs[:, 1], :], -1, -2)
-    pairs = np.zeros((len(injection_pairs), z.shape[-1]))
-    pairs[np.arange(len(injection_pairs)), injection_pairs[:, 0]] = 1.0
-    pairs[np.arange(len(injection_pairs)), injection_pairs[:, 1]] = -1.0
-    v = pairs @ y
-    v *= current_a
-    return v
-
-
-def four_terminal_matrix(injection_pairs: np.ndarray, measurement_pairs: np.ndarray, n_electrodes: int,
-                         current_a: float = 1.0) -> sp.csr_matrix:
-    """The same readings as a sparse linear map from Z flattened row-major (n_electrodes**2) to
-    the (n_injections * n_measurements) channels, injection-major: a Jacobian of Z maps through it."""
-    a, b = np.repeat(injection_pairs[:, 0], len(measurement_pairs)), np.repeat(injection_pairs[:, 1], len(measurement_pairs))
-    c, d = np.tile(measurement_pairs[:, 0], len(injection_pairs)), np.tile(measurement_pairs[:, 1], len(injection_pairs))
-    rows = np.repeat(np.arange(len(a)), 4)
-    cols = np.column_stack([c * n_electrodes + a, c * n_electrodes + b, d * n_electrodes + a, d * n_electrodes + b]).ravel()
-    vals = np.tile([current_a, -current_a, -current_a, current_a], len(a))
-    return sp.csr_matrix((vals, (rows, cols)), shape=(len(a), n_electrodes ** 2))

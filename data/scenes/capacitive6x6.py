@@ -16,11 +16,13 @@ Ideal chain, per frame and crossing (what runs with no effect listed):
    data/physics/elastic_half_space.py), superposed over the contact disc (flat punch p ~
    1/sqrt(1 - r^2/a^2) for the robot's PLA probe, Johnson eq. 3.35; Hertz p ~ sqrt(1 - r^2/a^2)
    for fingertips, eq. 4.23) and averaged over the crossing's sensing disc (its fringing
-   field, area `sensing_area_mm2`). The cover is taken as a half-space (its 4 mm against
-   loads of 2.5-5 mm radius); the soft Ecoflex below would spread the load a little more.
+   field, area `sensing_area_mm2`; tabulated in data/physics/buried_disc_stress.py). The cover
+   is taken as a half-space (its 4 mm against loads of 2.5-5 mm radius); the soft Ecoflex below
+   would spread the load a little more.
 2. The spacer closes under that stress. Soft silicones at tens of percent strain need a
-   hyperelastic law (physics notes): incompressible neo-Hookean uniaxial compression,
-   sigma = (E/3)(lambda^-2 - lambda), solved for the stretch lambda = d / d0; or, with
+   hyperelastic law (physics notes; data/physics/hyperelastic_compression.py): incompressible
+   neo-Hookean uniaxial compression, sigma = (E/3)(lambda^-2 - lambda), solved for the stretch
+   lambda = d / d0; or, with
    `spacer_limiting_i1` set (the default, J_m = 0.2), Gent's law (the neo-Hookean stress times
    J_m / (J_m - (I1 - 3))), whose spacer stiffens as it closes, as a synthetic foam or fabric
    spacer does: the response bends below a line as seed 001's does (Table 2's linear R² 0.995-0.998).
@@ -49,13 +51,12 @@ Protocols:
   (data/readers/contact_streams.py), each followed by a gap. `stream()` returns a ContactStream with
   the raw frames and the ground truth per frame and contact.
 """
-from functools import lru_cache
-
 import numpy as np
 import pandas as pd
 
 from common.errors import InputError
-from data.physics.elastic_half_space import disc_quadrature, vertical_stress_pa
+from data.physics.buried_disc_stress import PROFILES, kernel_lookup, stress_kernel
+from data.physics.hyperelastic_compression import gent_stretch, neo_hookean_stretch
 from data.preprocessing.contact_windows import window_channel_names, windows_around_peaks
 from data.readers.contact_streams import ContactStream, check_grid
 from data.scenes.capacitive6x6_effects import EFFECTS, MATERIAL_EFFECTS, READING_EFFECTS
@@ -68,110 +69,11 @@ TARGETS = ["force_n", "x_mm", "y_mm"]
 CHARACTERISATION_CHANNELS = ("cells", "window")
 PRESSES_PER_CHUNK = 256      # characterisation presses simulated together (memory, not results)
 FRAMES_PER_CHUNK = 2048      # stream frames simulated together
-PROFILES = ("uniform", "punch", "hertz")
 
 
 def channel_names(rows: int, cols: int) -> list[str]:
     """Row-major cell names, the order the firmware streams them (seed 001 eq. 2)."""
     return [f"rmc_r{r}_c{c}" for r in range(rows) for c in range(cols)]
-
-
-def _profile_weights(profile: str, rings: int, points_per_ring: int) -> np.ndarray:
-    """Share of the load on each node of disc_quadrature's equal-area rings, from the exact
-    ring integrals of the pressure profile (uniform, flat punch, Hertz)."""
-    edges = np.sqrt(np.arange(rings + 1) / rings)
-    cumulative = {"uniform": edges**2, "punch": 1.0 - np.sqrt(1.0 - edges**2),
-                  "hertz": 1.0 - (1.0 - edges**2) ** 1.5}[profile]
-    return np.repeat(np.diff(cumulative) / points_per_ring, points_per_ring)
-
-
-@lru_cache(maxsize=16)
-def stress_kernel(depth_mm: float, sensing_radius_mm: float, profile: str, radius_step_mm: float = 0.25,
-                  max_radius_mm: float = 15.0, distance_step_mm: float = 0.25):
-    """Mean vertical stress per newton (Pa/N) over a crossing's sensing disc at `depth_mm`, as a
-    table over the centre distance between load and crossing (rows) and the load's contact
-    radius (columns). Both discs are round, so the mean depends on the distance alone. Beyond
-    12 depths the Boussinesq stress (z/R)^5 has fallen below 1e-5 of its peak and is taken as zero."""
-    distances = np.arange(0.0, 12.0 * depth_mm + distance_step_mm, distance_step_mm)
-    radii = np.arange(0.0, max_radius_mm + radius_step_mm, radius_step_mm)
-    rx_x, rx_y, rx_w = disc_quadrature(sensing_radius_mm * 1e-3, rings=3, points_per_ring=8)
-    table = np.empty((len(distances), len(radii)))
-    for j, radius in enumerate(radii):
-        src_x, src_y, _ = disc_quadrature(radius * 1e-3, rings=4, points_per_ring=8)
-        src_w = _profile_weights(profile, 4, 8) if radius > 0 else np.ones(1)
-        dx = distances[:, None, None] * 1e-3 + rx_x[None, :, None] - src_x[None, None, :]
-        dy = rx_y[None, :, None] - src_y[None, None, :]
-        stress = vertical_stress_pa(dx, dy, depth_mm * 1e-3, 1.0)
-        table[:, j] = np.einsum("drs,r,s->d", stress, rx_w, src_w)
-    return distances, radii, table
-
-
-def kernel_lookup(kernel, distance_mm: np.ndarray, radius_mm: np.ndarray) -> np.ndarray:
-    """Bilinear interpolation in the stress table; zero beyond its last distance."""
-    distances, radii, table = kernel
-    fd = np.clip(distance_mm / distances[1], 0.0, len(distances) - 1.000001)
-    fr = np.clip(radius_mm / radii[1], 0.0, len(radii) - 1.000001)
-    i, j = fd.astype(np.int64), fr.astype(np.int64)
-    u, v = fd - i, fr - j
-    value = ((1 - u) * (1 - v) * table[i, j] + u * (1 - v) * table[i + 1, j]
-             + (1 - u) * v * table[i, j + 1] + u * v * table[i + 1, j + 1])
-    return np.where(distance_mm >= distances[-1], 0.0, value)
-
-
-def neo_hookean_stretch(stress_pa: np.ndarray, youngs_modulus_pa: float) -> np.ndarray:
-    """Stretch lambda <= 1 of an incompressible neo-Hookean solid under a uniaxial compressive
-    stress s >= 0: s = (E/3)(lambda^-2 - lambda) (Treloar, *The Physics of Rubber Elasticity*,
-    1975, eq. 4.9 with G = E/3), i.e. lambda^3 + (3 s / E) lambda^2 - 1 = 0, solved by Newton's
-    method from the small-strain guess (monotone and convergent for s >= 0)."""
-    stress_pa = np.asarray(stress_pa, dtype=float)
-    stretch = np.ones(stress_pa.shape)
-    loaded = stress_pa > 0          # rest frames and crossings out of a load's reach: nothing to solve
-    k = 3.0 * stress_pa[loaded] / youngs_modulus_pa
-    value = 1.0 / (1.0 + k / 3.0)
-    for _ in range(50):  # quadratic convergence: ~5 steps to 1e-13 from this guess
-        square = value * value
-        f = square * (value + k) - 1.0
-        value = value - f / (value * (3.0 * value + 2.0 * k))
-        if not np.any(np.abs(f) > 1e-13):
-            break
-    stretch[loaded] = value
-    return stretch
-
-
-def gent_stretch(stress_pa: np.ndarray, youngs_modulus_pa: float, limiting_i1: float) -> np.ndarray:
-    """Stretch lambda <= 1 of an incompressible Gent solid under a uniaxial compressive stress
-    s >= 0: s = (E/3)(lambda^-2 - lambda) J_m / (J_m - (I1 - 3)), I1 = lambda^2 + 2/lambda
-    (Gent, "A new constitutive relation for rubber", Rubber Chem. Technol. 69, 59, 1996). The
-    neo-Hookean law times a factor that grows without bound as I1 - 3 reaches the limiting value
-    J_m (`limiting_i1`): the material stiffens as it closes, and J_m -> infinity is neo-Hookean.
-
-    Between the locking stretch (I1 - 3 = J_m) and 1 the stress is a positive, decreasing,
-    convex function of lambda (a product of two such factors), so Newton's method started left
-    of the root rises monotonically onto it. The neo-Hookean stretch is left of it (Gent is
-    stiffer), unless it lies beyond the locking stretch, where the start is just inside it."""
-    stress_pa = np.asarray(stress_pa, dtype=float)
-    stretch = np.ones(stress_pa.shape)
-    loaded = stress_pa > 0
-    s, g = stress_pa[loaded], youngs_modulus_pa / 3.0
-    # the locking stretch: I1 - 3 = J_m on lambda < 1, where I1 - 3 falls monotonically in lambda
-    low, high = 1e-6, 1.0
-    for _ in range(60):
-        middle = 0.5 * (low + high)
-        low, high = (low, middle) if middle * middle + 2.0 / middle - 3.0 < limiting_i1 else (middle, high)
-    locking = high
-    value = np.maximum(neo_hookean_stretch(s, youngs_modulus_pa), locking + 1e-9 * (1.0 - locking))
-    for _ in range(200):  # a few steps from the neo-Hookean start; ~40 from just inside the lock
-        room = limiting_i1 - (value * value + 2.0 / value - 3.0)
-        neo = g * (1.0 / (value * value) - value)
-        f = neo * limiting_i1 / room - s
-        slope = (g * (-2.0 / value**3 - 1.0) * limiting_i1 / room
-                 + neo * limiting_i1 * (2.0 * value - 2.0 / (value * value)) / (room * room))
-        step = -f / slope
-        value = np.minimum(value + step, 1.0)
-        if not np.any(np.abs(step) > 1e-14):
-            break
-    stretch[loaded] = value
-    return stretch
 
 
 def pressed_cell(frame: pd.DataFrame, rows: int, cols: int, pitch_mm: float) -> np.ndarray:

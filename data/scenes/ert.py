@@ -10,8 +10,9 @@ any other layout is a list away.
 
 Readings (seed 002 §3.4, eq. 2): one current source drives `current_a` between an injection
 pair (a, b) (all N(N-1)/2 = 276 pairs, or a listed subset) and the voltage is read between
-successive electrodes (c, c+1), all from one transfer-resistance matrix per press
-(data/physics/sheet_conduction.py). Channels are the change from the unloaded frame taken
+successive electrodes (c, c+1), all from one transfer-resistance matrix per press. The
+patterns, the forward solve, the readings and the Jacobian are the ERT package's (data/ert/);
+this module runs the protocols through the effects. Channels are the change from the unloaded frame taken
 before the first press, `dv_a01_b02_m01_v` (time-difference imaging, as ERT systems record).
 
 Protocols: `single_point` (an 18 x 18 grid = the paper's 324 points, at `n_force_levels`
@@ -30,22 +31,18 @@ each session draws its own noise, hysteresis, drift (and random presses), so ses
 `calibration` is a recording independent of session 0, which the Tikhonov reconstruction is
 fitted on. Session 0 keeps the streams' plain names.
 """
-from functools import lru_cache
-from itertools import combinations
-
 import numpy as np
 import pandas as pd
 import scipy.sparse as sp
-from scipy.special import ndtr
 
 from common.errors import InputError
+from data.ert.cells import patch_weights
+from data.ert.forward import sheet_solver
+from data.ert.jacobian import cell_jacobian, channel_jacobian
+from data.ert.patch_loads import patch_loads_n
+from data.ert.protocol import channel_names, injection_pairs, measurement_pairs
+from data.ert.readings import four_terminal_voltage_v
 from data.physics.press_update import PatchUpdateSolver
-from data.physics.sheet_conduction import (
-    SheetGrid,
-    SheetSolver,
-    four_terminal_matrix,
-    four_terminal_voltage_v,
-)
 from data.scenes.contract import random_generator_for, resolve_effects
 from data.scenes.ert_effects import (
     EFFECTS,
@@ -57,102 +54,6 @@ from data.sensor_table import SensorTable
 
 TARGETS = ["x_mm", "y_mm", "force_n"]
 PROTOCOLS = ("single_point", "calibration", "two_point", "random", "blank")
-
-
-def injection_pairs(injection, n_electrodes: int) -> np.ndarray:
-    """0-based injection pairs: `all` = every unordered pair (N(N-1)/2), `adjacent` = each
-    electrode with the next in numbering, or a list of 1-based [a, b] pairs."""
-    if injection == "all":
-        return np.array(list(combinations(range(n_electrodes), 2)), dtype=np.int64)
-    if injection == "adjacent":
-        first = np.arange(n_electrodes)
-        return np.column_stack([first, (first + 1) % n_electrodes])
-    return _explicit_pairs(injection, n_electrodes, "injection")
-
-
-def measurement_pairs(measurement, n_electrodes: int) -> np.ndarray:
-    """0-based measurement pairs: `successive` = (c, c+1) cyclically (seed 002 §4.3), or a list."""
-    if measurement == "successive":
-        first = np.arange(n_electrodes)
-        return np.column_stack([first, (first + 1) % n_electrodes])
-    return _explicit_pairs(measurement, n_electrodes, "measurement")
-
-
-def _explicit_pairs(pattern, n_electrodes, what):
-    if isinstance(pattern, str):
-        raise InputError(f"scene ert: unknown {what} pattern '{pattern}'; expected "
-                         f"{'all, adjacent' if what == 'injection' else 'successive'} or a list of [i, j] pairs")
-    try:
-        pairs = np.asarray(list(map(list, pattern)), dtype=np.int64)
-    except (TypeError, ValueError):
-        raise InputError(f"scene ert: {what} pairs must be a list of [i, j] electrode numbers, got {pattern!r}") from None
-    if pairs.ndim != 2 or pairs.shape[1] != 2 or len(pairs) == 0:
-        raise InputError(f"scene ert: {what} pairs must be a list of [i, j] electrode numbers, got {pairs.tolist()}")
-    bad = pairs[(pairs < 1).any(axis=1) | (pairs > n_electrodes).any(axis=1) | (pairs[:, 0] == pairs[:, 1])]
-    if len(bad):
-        raise InputError(f"scene ert: {what} pair {bad[0].tolist()} names a missing electrode or the same one "
-                         f"twice; electrodes are 1-{n_electrodes}")
-    return pairs - 1
-
-
-def channel_names(injections: np.ndarray, measurements: np.ndarray) -> list[str]:
-    return [f"dv_a{a + 1:02d}_b{b + 1:02d}_m{c + 1:02d}_v" for a, b in injections for c, _ in measurements]
-
-
-def patch_weights(node_xy_mm: np.ndarray, side_mm: float, patch_mm: float) -> np.ndarray:
-    """(n_nodes, n_patches) share of each node's cell under each patch: 1 inside a patch, split
-    equally between the patches that meet on a patch border (so the map is mirror symmetric)."""
-    n = int(round(side_mm / patch_mm))
-    position = node_xy_mm / patch_mm
-    tolerance = 1e-9
-    low = np.clip(np.ceil(position - 1 - tolerance).astype(int), 0, n - 1)   # patches whose closed square holds the node
-    high = np.clip(np.floor(position + tolerance).astype(int), 0, n - 1)
-    weights = np.zeros((len(node_xy_mm), n * n))
-    for ix_choice in (low[:, 0], high[:, 0]):
-        for iy_choice in (low[:, 1], high[:, 1]):
-            np.add.at(weights, (np.arange(len(node_xy_mm)), iy_choice * n + ix_choice), 0.25)
-    return weights
-
-
-def _disk_samples(radius_mm: float, n_rings: int = 4, n_angles: int = 12) -> np.ndarray:
-    """Points over a disk, each standing for an equal share of its area: equal-area rings
-    (radii at sqrt of the ring mid-areas) times angles offset by half a step, so the set is
-    mirror symmetric in x and y (a mirrored press loads mirrored patches exactly)."""
-    r = radius_mm * np.sqrt((np.arange(n_rings) + 0.5) / n_rings)
-    angle = (np.arange(n_angles) + 0.5) * 2.0 * np.pi / n_angles
-    rr, aa = np.meshgrid(r, angle, indexing="ij")
-    return np.column_stack([(rr * np.cos(aa)).ravel(), (rr * np.sin(aa)).ravel()])
-
-
-def patch_loads_n(contacts: np.ndarray, side_mm: float, patch_mm: float, radius_mm: float,
-                  spread_sd_mm: float) -> np.ndarray:
-    """(n_presses, n_patches) load on each patch from (n_presses, n_contacts, 3) contacts
-    [x_mm, y_mm, force_n]: each indenter's footprint, blurred by a Gaussian of sd
-    `spread_sd_mm` (foam_spread; 0 = none), integrated over each patch and kept on the sheet.
-    Shares below 1e-3 of a contact's load are dropped so a press changes few patches."""
-    n_side = int(round(side_mm / patch_mm))
-    edges = np.arange(n_side + 1) * patch_mm
-    samples = _disk_samples(radius_mm)
-    loads = np.zeros((len(contacts), n_side * n_side))
-    for k in range(contacts.shape[1]):
-        pressed = np.flatnonzero(contacts[:, k, 2] != 0.0)   # an absent second indenter loads nothing
-        px = contacts[pressed, k, 0:1] + samples[None, :, 0]       # (n, n_samples)
-        py = contacts[pressed, k, 1:2] + samples[None, :, 1]
-        if spread_sd_mm > 0:
-            cx = ndtr((edges[None, None, :] - px[..., None]) / spread_sd_mm)
-            cy = ndtr((edges[None, None, :] - py[..., None]) / spread_sd_mm)
-            wx, wy = np.diff(cx, axis=-1), np.diff(cy, axis=-1)  # (n, n_samples, n_side)
-        else:
-            ix = np.clip((px / patch_mm).astype(int), 0, n_side - 1)
-            iy = np.clip((py / patch_mm).astype(int), 0, n_side - 1)
-            wx = np.eye(n_side)[ix]
-            wy = np.eye(n_side)[iy]
-        share = (np.swapaxes(wy, 1, 2) @ wx).reshape(len(pressed), n_side * n_side)     # sum over samples of wy wx
-        share /= np.maximum(share.sum(axis=1, keepdims=True), 1e-300)
-        share[share < 1e-3] = 0.0
-        share /= np.maximum(share.sum(axis=1, keepdims=True), 1e-300)
-        loads[pressed] += share * contacts[pressed, k, 2:3]
-    return loads
 
 
 class ERTScene:
@@ -347,13 +248,14 @@ class ERTScene:
             factor = (sp.csr_matrix(node_patch) @ factor.T).T
         return base_nodes[None, :] * factor
 
+    def transfer_jacobian(self, sensor) -> np.ndarray:
+        """(n_patches, n_electrodes, n_electrodes) dZ / d (relative patch conductance) of the sensor unloaded."""
+        solver = self._solver(sensor)
+        return cell_jacobian(solver.solver, solver.base_conductance_s, self.side_mm, self.patch_mm)
+
     def patch_jacobian(self, sensor) -> np.ndarray:
         """(n_channels, n_patches) d voltage / d (relative patch conductance) of the sensor unloaded."""
-        solver = self._solver(sensor)
-        dz = solver.transfer_resistance_jacobian(patch_weights(solver.solver.grid.node_xy_mm, self.side_mm, self.patch_mm))
-        injections, measurements = self.patterns()
-        to_channels = four_terminal_matrix(injections, measurements, self.n_electrodes, self.current_a)
-        return np.asarray(to_channels @ dz.reshape(len(dz), -1).T)
+        return channel_jacobian(self.transfer_jacobian(sensor), *self.patterns(), self.current_a)
 
     def simulate(self, contacts: np.ndarray, extra=None) -> SensorTable:
         """Readings for arbitrary presses: (n, n_contacts, 3) [x_mm, y_mm, force_n]."""
@@ -414,14 +316,3 @@ class ERTScene:
                 "sheet_resistance_ohm_per_sq": float(self.sheet_resistance_ohm_per_sq),
                 "current_a": float(self.current_a), "injection": self.injection, "measurement": self.measurement,
                 "indenter_diameter_mm": float(self.indenter_diameter_mm)}
-
-
-@lru_cache(maxsize=6)
-def sheet_solver(side_mm, grid_nodes, electrode_width_mm, electrodes_mm, patch_mm, sheet_resistance_ohm_per_sq,
-                 patch_base_resistance_scale, anisotropy=1.0) -> PatchUpdateSolver:
-    """The patch-update solver for one sensor (geometry, base map, anisotropy), built once per process."""
-    grid = SheetGrid(side_mm, grid_nodes, np.asarray(electrodes_mm, dtype=float), electrode_width_mm)
-    solver = SheetSolver(grid, anisotropy)
-    share = patch_weights(grid.node_xy_mm, side_mm, patch_mm)
-    base = 1.0 / (sheet_resistance_ohm_per_sq * (share @ np.asarray(patch_base_resistance_scale)))
-    return PatchUpdateSolver(solver, base, max_patch_nodes=700)

@@ -13,9 +13,9 @@ from data.physics.contact_mechanics import (
     bonded_layer_deflection_mm,
     flat_punch_force_n,
     mean_pressure_pa,
-    neo_hookean_stiffening,
     standard_linear_solid_relaxation,
 )
+from data.physics.hyperelastic_compression import neo_hookean_stiffening
 from data.preprocessing.minmax_scaling import MinMaxScaling
 
 

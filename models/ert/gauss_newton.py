@@ -1,16 +1,17 @@
 """One-step Gauss-Newton (linearised difference) reconstruction of an ERT skin with a choice of
 prior: image = (J^T J + lambda R)^-1 J^T v (Holder 2005 ch. 2; Adler et al. 2007), J the
 channels' Jacobian with respect to each pixel's relative conductance at the nominal, uniform
-sheet (adjoint sensitivity, readings.py), R from priors.py. The prior, lambda (relative to
+sheet (adjoint sensitivity, data/ert/jacobian.py), R from priors.py. The prior, lambda (relative to
 trace(J^T J)) and the read-out threshold are chosen on the validation presses given to `fit`
 (linear_image.py). Through u = K^T v: image = (J^T J + lambda R)^-1 J_z^T u, J = K J_z.
 """
 import numpy as np
 
 from common.errors import InputError
+from data.ert.jacobian import pixel_sensitivity
 from models.ert.linear_image import LinearImageReconstruction
+from models.ert.pixel_grid import pixel_centres_mm
 from models.ert.priors import PRIORS, prior_matrix
-from models.ert.readings import pixel_centres_mm, pixel_sensitivity
 
 
 class GaussNewtonReconstruction(LinearImageReconstruction):

@@ -15,7 +15,7 @@ ERTScene parameters with its effects) on `n_training_sensors` simulated sensors 
 (`training_seed` + k) are not the sensor under test, so manufacturing spread is in the
 training set. The image grid may extend `margin_mm` beyond the sheet, so a blob near an edge is
 not cut off and its centroid is not pulled inwards. Everything runs in u = K^T y
-(readings.py), with Sigma_n = K^T K (white channel noise). lambda (relative to
+(data/ert/readings.py), with Sigma_n = K^T K (white channel noise). lambda (relative to
 trace(Y Y^T) / trace(Sigma_n)), the desired radius and the read-out threshold are chosen on
 the validation presses given to `fit` (linear_image.py).
 """
@@ -27,7 +27,7 @@ import numpy as np
 from common.errors import InputError
 from data.scenes.ert import ERTScene
 from models.ert.linear_image import LinearImageReconstruction
-from models.ert.readings import pixel_centres_mm
+from models.ert.pixel_grid import pixel_centres_mm
 
 
 class GreitReconstruction(LinearImageReconstruction):

@@ -12,17 +12,34 @@ validation presses (a calibration recording of the sensor under test): GREIT cho
 hyper-parameters there; the regressor never sees them.
 """
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
 from models.ert.greit import GreitReconstruction
-from models.ert.image_readout import thresholded_centroid
+from models.ert.image_readout import thresholded_centroid, window_around_peak
+from models.ert.reconstruction import ERTReconstruction
 from models.trees import TreeRegressor
 
+REGRESSOR_PARAMS = ("half_width_px", "n_estimators", "max_features")
 
-class GreitLearnedInverse(RegressorMixin, BaseEstimator):
+
+class GreitLearnedInverse(ERTReconstruction):
     """ERT voltages -> (x_mm, y_mm, force_n): GREIT, then a regressor trained on other sensors."""
+
+    @classmethod
+    def for_sensor(cls, geometry, training_scene, seed, **params) -> "GreitLearnedInverse":
+        """GREIT's settings and the regressor's (REGRESSOR_PARAMS) in one mapping, as a study gives them."""
+        own = {k: params.pop(k) for k in REGRESSOR_PARAMS if k in params}
+        return cls(greit=GreitReconstruction.for_sensor(geometry, training_scene, seed, **params), seed=seed, **own)
+
+    def training_sensor_seeds(self) -> list[int]:
+        return (self.greit if self.greit is not None else GreitReconstruction()).training_sensor_seeds()
+
+    def chosen_hyperparameters(self) -> dict:
+        return self.greit_.chosen_hyperparameters()
+
+    def validation_localisation_mm(self) -> float:
+        return self.greit_.validation_localisation_mm()
 
     def __init__(self, greit=None, half_width_px=3, n_estimators=300, max_features=0.5, seed=0):
         self.greit = greit
@@ -34,14 +51,8 @@ class GreitLearnedInverse(RegressorMixin, BaseEstimator):
     def _features(self, images) -> tuple[np.ndarray, np.ndarray]:
         """(centroid (n, 2), features (n, 3 + (2h + 1)^2))."""
         g = self.greit_
-        n, h = int(g.pixels_per_side), int(self.half_width_px)
         xy, mass = thresholded_centroid(images, g.pixel_centres_mm_, g.threshold_)
-        padded = np.pad(images.reshape(-1, n, n), ((0, 0), (h, h), (h, h)))
-        peak = images.argmax(axis=1)
-        iy, ix = peak // n, peak % n
-        offsets = np.arange(2 * h + 1)
-        window = padded[np.arange(len(images))[:, None, None], iy[:, None, None] + offsets[None, :, None],
-                        ix[:, None, None] + offsets[None, None, :]].reshape(len(images), -1)
+        _, _, window = window_around_peak(images, g.pixels_per_side, self.half_width_px)
         scale = np.maximum(images.max(axis=1, keepdims=True), 1e-300)
         return xy, np.column_stack([xy, mass, window / scale])
 

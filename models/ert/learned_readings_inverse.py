@@ -4,8 +4,8 @@ small MLP on the window of patches around the most loaded one.
 Why this shape: a press changes the conductance of whole 20 mm patches, so where inside a patch
 it sits is only in how the neoprene shares its load with the neighbouring patches. Step one is a
 GREIT-like linear map (Adler et al. 2009, eq. 8 and 10) from the 276 reduced readings
-u = K^T v (readings.py) to the 10 x 10 patch loads, trained on simulated presses whose desired
-image is the true patch loads (data/scenes/ert.py `patch_loads_n`, the scene's own footprint and
+u = K^T v (data/ert/readings.py) to the 10 x 10 patch loads, trained on simulated presses whose desired
+image is the true patch loads (data/ert/patch_loads.py `patch_loads_n`, the scene's own footprint and
 foam spread), with a noise term lambda K^T K. Step two reads the press from the
 (2h + 1)^2 patches around the patch whose 3 x 3 neighbourhood carries most load (relative loads,
 the log of the largest, and where the window sits on the sheet): an MLP predicts the offset
@@ -36,14 +36,15 @@ from functools import lru_cache
 
 import numpy as np
 import torch
-from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 from torch import nn
 
 from common.errors import InputError
-from data.scenes.ert import patch_loads_n
+from data.ert.patch_loads import patch_loads_n
+from data.ert.readings import transfer_basis
 from models.ert.greit import GreitReconstruction
-from models.ert.readings import checked_voltages, transfer_basis
+from models.ert.reconstruction import ERTReconstruction, localisation_mm
+from models.ert.validation import checked_presses, checked_voltages, required_geometry
 
 OFFSET_SCALE_MM = 10.0        # half a patch: the MLP's offsets are of order one
 FORCE_CENTRE_N, FORCE_SCALE_N = 8.0, 4.0
@@ -126,7 +127,7 @@ def _reduced_presses(simulator_json: str) -> tuple[np.ndarray, np.ndarray]:
     return np.vstack(readings), np.vstack(targets)
 
 
-class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
+class LearnedReadingsInverse(ERTReconstruction):
     """ERT voltages (changes from the unloaded frame) -> (x_mm, y_mm, force_n)."""
 
     def __init__(self, geometry=None, training_scene=None, patch_mm=20.0, foam_spread_sd_mm=None,
@@ -162,6 +163,9 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
     def training_sensor_seeds(self) -> list[int]:
         return self._simulator().training_sensor_seeds()
 
+    def chosen_hyperparameters(self) -> dict:
+        return {"noise_weight": self.noise_weight_}
+
     def _training_readings(self) -> tuple[np.ndarray, np.ndarray]:
         """(u = K^T v, targets) of the training presses."""
         simulator = self._simulator().get_params()
@@ -181,8 +185,7 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
 
     def fit(self, X, y):
         """X, y: validation presses of the sensor under test (the noise weight is chosen there)."""
-        if self.geometry is None:
-            raise InputError("model.geometry is required: the scene's nominal geometry (ERTScene.geometry())")
+        required_geometry(self.geometry)
         if int(self.half_width_patches) < 0 or min(int(self.width), int(self.epochs), int(self.n_members)) < 1:
             raise InputError(f"model.half_width_patches must be >= 0, width, epochs and n_members >= 1; got "
                              f"{self.half_width_patches}, {self.width}, {self.epochs}, {self.n_members}")
@@ -190,14 +193,7 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
         if weights.size == 0 or not (weights > 0).all():
             raise InputError(f"model.noise_weights must be positive, got {weights.tolist()}")
         basis = transfer_basis(self.geometry)
-        X = checked_voltages(X, basis.shape[0])
-        y = np.asarray(y, dtype=float)
-        if y.ndim != 2 or y.shape[1] < 3 or len(y) != len(X):
-            raise InputError(f"validation targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
-        usable = y[:, 2] >= self.quantification_limit_n
-        if usable.sum() < 4:
-            raise InputError(f"the validation set has {int(usable.sum())} presses at or above the quantification "
-                             f"limit ({self.quantification_limit_n} N); at least 4 are needed")
+        X, y = checked_presses(X, y, basis.shape[0], self.quantification_limit_n)
         side = float(self.geometry["side_mm"])
         n_side = int(round(side / float(self.patch_mm)))
         u, targets = self._training_readings()
@@ -206,18 +202,17 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
         noise = np.asarray((basis.T @ basis).todense())
         signal = u.T @ u
         scale = np.trace(signal) / np.trace(noise)
-        validation = torch.as_tensor(X[usable], dtype=torch.float32)
+        validation = torch.as_tensor(X, dtype=torch.float32)
 
-        def localisation_mm(module):
+        def validation_mm(module):
             with torch.no_grad():
-                xy = module(validation).numpy()[:, :2]
-            return float(np.hypot(*(xy - y[usable, :2]).T).mean())
+                return localisation_mm(module(validation).numpy()[:, :2], y)
 
         best, scores = None, []
         for weight in weights:       # one net per noise weight chooses the weight
             patch_map = np.linalg.solve(signal + weight * scale * noise, u.T @ loads)        # (n_z, n_patches)
             module = self._train(np.asarray(basis @ patch_map), u @ patch_map, targets, n_side, member=0)
-            scores.append({"noise_weight": float(weight), "localisation_mm": localisation_mm(module)})
+            scores.append({"noise_weight": float(weight), "localisation_mm": validation_mm(module)})
             if best is None or scores[-1]["localisation_mm"] < best[0]:
                 best = (scores[-1]["localisation_mm"], float(weight), module, patch_map)
         _, self.noise_weight_, module, patch_map = best
@@ -228,7 +223,7 @@ class LearnedReadingsInverse(RegressorMixin, BaseEstimator):
         module.mlp = MeanOfNets([member.mlp for member in members])
         self.module_ = module
         self.validation_scores_ = scores
-        self.ensemble_localisation_mm_ = localisation_mm(module)
+        self.ensemble_localisation_mm_ = validation_mm(module)
         self.n_features_in_ = basis.shape[0]
         return self
 

@@ -1,6 +1,6 @@
 """The estimator shared by the linear ERT reconstructions (gauss_newton.py, greit.py).
 
-frame v (changes from the unloaded frame) -> u = K^T v (readings.py) -> image = A u on a pixel
+frame v (changes from the unloaded frame) -> u = K^T v (data/ert/readings.py) -> image = A u on a pixel
 grid -> thresholded weighted centroid (image_readout.py) -> (x_mm, y_mm); force_n =
 c0 + c1 m + c2 m^2 with m the thresholded image's mass. Only A and how it is built differ
 between reconstructions: a subclass yields candidate maps (one per hyper-parameter setting),
@@ -9,43 +9,35 @@ error on the presses it is given, which are validation presses (a calibration re
 never test presses. The force polynomial is then fitted on the same presses.
 """
 import numpy as np
-from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
+from data.ert.readings import transfer_basis
 from models.ert.image_readout import thresholded_centroid
-from models.ert.readings import checked_voltages, transfer_basis
+from models.ert.reconstruction import ERTReconstruction, localisation_mm
+from models.ert.validation import checked_presses, checked_voltages, required_geometry
 
 
-class LinearImageReconstruction(RegressorMixin, BaseEstimator):
+class LinearImageReconstruction(ERTReconstruction):
     """Subclasses set `geometry`, `thresholds`, `quantification_limit_n` and implement
     `_candidates(basis)` -> iterable of (params dict, A (n_pixels, n_z)) and `_centres()`."""
 
-
     def fit(self, X, y):
         """X: (n_presses, n_channels) validation voltages; y: (n_presses, 3) x_mm, y_mm, force_n."""
-        if self.geometry is None:
-            raise InputError("model.geometry is required: the scene's nominal geometry (ERTScene.geometry())")
+        required_geometry(self.geometry)
         thresholds = np.atleast_1d(np.asarray(self.thresholds, dtype=float))
         if thresholds.size == 0 or not ((thresholds >= 0) & (thresholds < 1)).all():
             raise InputError(f"model.thresholds must lie in [0, 1), got {thresholds.tolist()}")
         basis = transfer_basis(self.geometry)
-        X = checked_voltages(X, basis.shape[0])
-        y = np.asarray(y, dtype=float)
-        if y.ndim != 2 or y.shape[1] < 3 or len(y) != len(X):
-            raise InputError(f"validation targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
-        usable = y[:, 2] >= self.quantification_limit_n
-        if usable.sum() < 4:
-            raise InputError(f"the validation set has {int(usable.sum())} presses at or above the quantification "
-                             f"limit ({self.quantification_limit_n} N); at least 4 are needed")
-        u, y = np.asarray(basis.T @ X[usable].T).T, y[usable, :3]
+        X, y = checked_presses(X, y, basis.shape[0], self.quantification_limit_n)
+        u = np.asarray(basis.T @ X.T).T
         centres = self._centres()
         best, scores = None, []
         for params, image_map in self._candidates(basis):
             images = u @ image_map.T
             for threshold in thresholds:
                 xy, _ = thresholded_centroid(images, centres, threshold)
-                error = float(np.hypot(*(xy - y[:, :2]).T).mean())
+                error = localisation_mm(xy, y)
                 scores.append({**params, "threshold": float(threshold), "localisation_mm": error})
                 if best is None or error < best[0]:
                     best = (error, params, float(threshold), image_map)
@@ -58,6 +50,9 @@ class LinearImageReconstruction(RegressorMixin, BaseEstimator):
         self.force_coefficients_ = np.linalg.lstsq(design, y[:, 2], rcond=None)[0]
         self.n_features_in_ = basis.shape[0]
         return self
+
+    def chosen_hyperparameters(self) -> dict:
+        return {**self.params_, "threshold": self.threshold_}
 
     def image(self, X) -> np.ndarray:
         """(n_frames, n_pixels) reconstructed image (rows in y, columns in x of `pixel_centres_mm_`)."""

@@ -1,6 +1,8 @@
 """Building blocks shared by the 1-D convolutional time-series classifiers."""
 from torch import nn
 
+from models.storable import storable
+
 
 def same_conv(n_in: int, n_out: int, kernel: int, bias: bool = True) -> nn.Sequential:
     """Conv1d whose output has the input's length: explicit zero padding (k-1)//2 left and k//2
@@ -16,6 +18,7 @@ def conv_bn_relu(n_in: int, n_out: int, kernel: int, relu: bool = True) -> nn.Se
     return nn.Sequential(*layers)
 
 
+@storable
 class ResidualConvBlock(nn.Module):
     """Three convolutions (kernels 8, 5, 3 by default) plus a shortcut, then ReLU
     (Wang et al., "Time series classification from scratch with deep neural networks", 2017).

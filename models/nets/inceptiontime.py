@@ -13,8 +13,10 @@ import torch
 from torch import nn
 
 from models.nets.conv_blocks import same_conv
+from models.storable import storable
 
 
+@storable
 class InceptionModule(nn.Module):
     def __init__(self, n_in: int, filters: int = 32, bottleneck: int = 32, kernels=(39, 19, 9)):
         super().__init__()
@@ -31,6 +33,7 @@ class InceptionModule(nn.Module):
         return self.relu(self.bn(torch.cat(branches, dim=1)))
 
 
+@storable
 class InceptionTime(nn.Module):
     def __init__(self, n_channels: int, n_classes: int, length: int | None = None, modalities=None,
                  depth: int = 6, filters: int = 32, bottleneck: int = 32, kernels=(39, 19, 9)):

@@ -14,8 +14,10 @@ import torch
 from torch import nn
 
 from models.nets.conv_blocks import conv_bn_relu
+from models.storable import storable
 
 
+@storable
 class LSTMFCN(nn.Module):
     def __init__(self, n_channels: int, n_classes: int, length: int, modalities=None, hidden: int = 128,
                  dropout: float = 0.8, widths=(128, 256, 128), kernels=(8, 5, 3)):

@@ -11,7 +11,10 @@ import math
 import torch
 from torch import nn
 
+from models.storable import storable
 
+
+@storable
 class MemberAverage(nn.Module):
     def __init__(self, members):
         super().__init__()

@@ -16,8 +16,10 @@ import torch
 from torch import nn
 
 from models.nets.conv_blocks import ResidualConvBlock, conv_bn_relu
+from models.storable import storable
 
 
+@storable
 class PRCNN(nn.Module):
     def __init__(self, n_channels: int, n_classes: int, length: int | None = None, modalities=None,
                  branch_width: int = 64, fusion_width: int = 128, kernels=(8, 5, 3), fusion_kernels=(5, 3)):

@@ -10,8 +10,10 @@ standard network and report its own count.
 from torch import nn
 
 from models.nets.conv_blocks import ResidualConvBlock
+from models.storable import storable
 
 
+@storable
 class ResCNN(nn.Module):
     def __init__(self, n_channels: int, n_classes: int, length: int | None = None, modalities=None,
                  widths=(64, 128, 128), kernels=(8, 5, 3)):

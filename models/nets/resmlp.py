@@ -12,8 +12,10 @@ import torch
 from torch import nn
 
 from common.errors import InputError
+from models.storable import storable
 
 
+@storable
 class GaussianNoise(nn.Module):
     """Adds N(0, std^2) noise to the input while training; the identity at inference."""
 
@@ -25,6 +27,7 @@ class GaussianNoise(nn.Module):
         return x + self.std * torch.randn_like(x) if self.training and self.std > 0 else x
 
 
+@storable
 class ResidualBlock(nn.Module):
     def __init__(self, n_in: int, width: int, dropout: float):
         super().__init__()
@@ -37,6 +40,7 @@ class ResidualBlock(nn.Module):
         return self.main(x) + self.skip(x)
 
 
+@storable
 class ResMLP(nn.Module):
     def __init__(self, n_in: int, n_out: int, widths=(256, 128, 96, 64),
                  dropouts=(0.40, 0.35, 0.30, 0.25), noise_std=0.02):

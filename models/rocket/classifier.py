@@ -28,12 +28,13 @@ import numpy as np
 import torch
 from scipy.optimize import minimize_scalar
 from scipy.special import log_softmax
-from sklearn.base import BaseEstimator, ClassifierMixin
 from sklearn.linear_model import LogisticRegression
 
 from common.errors import InputError
 from common.standardise import mean_and_scale
 from data.splits.indices import stratified_folds
+from models.capabilities import declare
+from models.estimator_base import TouchstoneClassifier
 from models.rocket.hydra import HydraMiniRocket
 from models.rocket.minirocket import MIN_LENGTH, N_KERNELS, MiniRocket
 from models.rocket.ridge_loo import class_indicators, ridge_loo
@@ -45,7 +46,7 @@ WORK_ELEMENTS = 8_000_000   # elements of a transform batch's largest tensor (32
 MAX_TEMPERATURE = 10.0     # ridge scores are about +-1: at most a logit gap of ~20 where leave-one-out never errs (log loss -> 0 as t grows)
 
 
-class RocketClassifier(BaseEstimator, ClassifierMixin):
+class RocketClassifier(TouchstoneClassifier):
     def __init__(self, n_features=10_000, head="auto", ridge_max_samples=2_000, logistic_c=1.0,
                  logistic_max_iter=1_000, seed=0, member="minirocket", n_folds=3):
         self.n_features = n_features
@@ -56,6 +57,12 @@ class RocketClassifier(BaseEstimator, ClassifierMixin):
         self.seed = seed
         self.member = member
         self.n_folds = n_folds
+
+    def __sklearn_tags__(self):
+        tags = declare(super().__sklearn_tags__(), holds_out_training=True, reads_windows=True, named_by="network",
+                       size="n_parameters")
+        tags.input_tags.two_d_array, tags.input_tags.three_d_array = False, True   # windows (n, channels, steps)
+        return tags
 
     def _checked(self, X) -> np.ndarray:
         X = np.asarray(X, dtype=np.float64)

@@ -30,6 +30,8 @@ import torch
 from torch import nn
 
 from models.rocket.minirocket import KERNEL_LENGTH, MiniRocket
+from models.storable import storable
+
 
 MAX_COMBINED_CHANNELS = 8
 SPARSE_EXPONENT = 4
@@ -41,6 +43,7 @@ def hydra_dilations(length: int) -> list[int]:
     return [2 ** e for e in range(int(math.log2((length - 1) / (KERNEL_LENGTH - 1))) + 1)]
 
 
+@storable
 class HydraDilation(nn.Module):
     """One dilation: [batch, channels, length] -> [batch, 2 x 2 x groups/2 x kernels] (input then
     difference; within each, max soft counts then min hard counts, by group and kernel)."""
@@ -78,6 +81,7 @@ class HydraDilation(nn.Module):
         return torch.cat([self.counts(x, 0), self.counts(difference, 1)], dim=1)
 
 
+@storable
 class Hydra(nn.Module):
     """windows [batch, channels, length] float32 (standardised) -> sparse-scaled Hydra features."""
 
@@ -106,6 +110,7 @@ class Hydra(nn.Module):
         self.sparse_scale.copy_(root.std(0) + epsilon)   # torch's std: n - 1, as the paper's code
 
 
+@storable
 class HydraMiniRocket(nn.Module):
     """MiniRocket's PPV features, then Hydra's sparse-scaled ones: the transform `transform=
     hydra_minirocket` gives RocketClassifier, with MiniRocket's interface (`groups` for batch

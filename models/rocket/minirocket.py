@@ -36,6 +36,8 @@ import numpy as np
 import torch
 from torch import nn
 
+from models.storable import storable
+
 KERNEL_LENGTH = 9
 KERNEL_POSITIONS = torch.tensor(list(itertools.combinations(range(KERNEL_LENGTH), 3)), dtype=torch.long)  # 84 x 3
 N_KERNELS = len(KERNEL_POSITIONS)
@@ -80,6 +82,7 @@ def linear_quantiles(values: np.ndarray, levels: np.ndarray) -> np.ndarray:
     return low + (high - low) * (position - below)
 
 
+@storable
 class DilationGroup(nn.Module):
     """The dilations that have the same number of features per kernel, computed at once:
     windows [batch, channels, length] -> their PPV features [batch, dilations x 84 x count].
@@ -249,6 +252,7 @@ class DilationGroup(nn.Module):
         return padded, copies, counts, steps
 
 
+@storable
 class MiniRocket(nn.Module):
     """windows [batch, channels, length] float32 (standardised) -> PPV features [batch, n_features]
     (`transform`: dilation groups in turn, within one by dilation, kernel, bias), or -> class

@@ -38,12 +38,13 @@ from sklearn.metrics import r2_score
 from sklearn.svm import SVR
 from sklearn.tree import DecisionTreeRegressor
 
+from common.spread import format_mean_sd
 from common.standardise import mean_and_scale
 from data.scenes.capacitive6x6 import (Capacitive6x6Scene, correlation_factor_rmc_per_n, pressed_cell,
                                        pressed_cell_rmc)
 from data.splits.indices import holdout
 from models.contact_tracking.timing import latency_summary, timed_updates
-from runs.fidelity.observations import Measured, mean_sd, observation, probe
+from runs.fidelity.observations import Measured, observation, probe
 from runs.report.tracking_metrics import evaluate_tracking
 from runs.studies.capacitive_tracking import make_tracker, track
 
@@ -196,7 +197,8 @@ def tracking_within_a_millisecond(probe: CapacitiveProbe) -> Measured:
     contacts = np.mean([r["contacts_per_frame"] for r in runs])
     holds = bool(np.mean(live) < 1000 and np.mean(empty) < 1000)
     return Measured(f"p50 per frame, our tracker (no force, one thread, load average {os.getloadavg()[0]:.1f}): "
-                    f"{mean_sd(empty, 1)} µs without contacts, {mean_sd(live, 1)} µs on the sessions' frames "
+                    f"{format_mean_sd(empty, '.1f')} µs without contacts, {format_mean_sd(live, '.1f')} µs on the "
+                    f"sessions' frames "
                     f"({contacts:.1f} contacts per frame; seeds {_seeds(probe)})", holds,
                     "both below 1,000 µs (timings: not asserted by the tests)",
                     {"live_us": live, "empty_us": empty})
@@ -230,9 +232,10 @@ def detection_limit_and_linearity(probe: CapacitiveProbe) -> Measured:
         peak.append(means[-1])
         lod.append(3 * probe.tracking[seed]["rest_sd_counts"] / slope)
     holds = bool(0.05 <= np.mean(lod) <= 0.2 and 100 <= np.mean(peak) <= 225 and np.mean(line_r2) > 0.99)
-    return Measured(f"limit of detection (3σ of one rest frame, median cell / slope) {mean_sd(lod, 3)} N; pressed cell's "
-                    f"change at 3 N {mean_sd(peak, 1)} counts; R² of a line through the ten levels' means "
-                    f"{mean_sd(line_r2, 5)} (seeds {_seeds(probe)}, every listed effect)", holds,
+    return Measured(f"limit of detection (3σ of one rest frame, median cell / slope) {format_mean_sd(lod, '.3f')} N; "
+                    f"pressed cell's change at 3 N {format_mean_sd(peak, '.1f')} counts; R² of a line through the ten "
+                    f"levels' means "
+                    f"{format_mean_sd(line_r2, '.5f')} (seeds {_seeds(probe)}, every listed effect)", holds,
                     "LOD 0.05-0.2 N, 3 N change 100-225 counts, line R² > 0.99",
                     {"lod_n": lod, "peak_counts": peak, "line_r2": line_r2})
 
@@ -240,7 +243,8 @@ def detection_limit_and_linearity(probe: CapacitiveProbe) -> Measured:
 def _ranking_text(probe, protocol, configuration="project") -> str:
     r2, rmse = (probe.per_model(protocol, key, configuration=configuration) for key in ("r2", "rmse"))
     order = sorted(MODELS, key=lambda m: rmse[m].mean())
-    return (f"{protocol}: " + ", ".join(f"{m} R² {mean_sd(r2[m], 4)} RMSE {mean_sd(rmse[m], 4)} N" for m in order))
+    return (f"{protocol}: " + ", ".join(f"{m} R² {format_mean_sd(r2[m], '.4f')} "
+                                        f"RMSE {format_mean_sd(rmse[m], '.4f')} N" for m in order))
 
 
 @observation("capacitive6x6", "3", "Every model (linear regression, linear SVR, decision tree, GPR) reaches "
@@ -285,8 +289,8 @@ def decision_tree_is_best(probe: CapacitiveProbe) -> Measured:
 def decision_tree_accuracy(probe: CapacitiveProbe) -> Measured:
     rmse, r2, slope = (probe.per_model("paper", key, ["decision_tree"])["decision_tree"] for key in ("rmse", "r2", "slope"))
     holds = bool(0.0446 / 2 <= rmse.mean() <= 2 * 0.0585 and r2.mean() > 0.99 and abs(slope.mean() / 51.76 - 1) <= 0.2)
-    return Measured(f"paper's split: RMSE {mean_sd(rmse, 4)} N, R² {mean_sd(r2, 4)}, slope {mean_sd(slope, 2)} counts/N "
-                    f"(seeds {_seeds(probe)})", holds, "RMSE within a factor 2 of 0.0446-0.0585 N, R² > 0.99, "
+    return Measured(f"paper's split: RMSE {format_mean_sd(rmse, '.4f')} N, R² {format_mean_sd(r2, '.4f')}, "
+                    f"slope {format_mean_sd(slope, '.2f')} counts/N (seeds {_seeds(probe)})", holds, "RMSE within a factor 2 of 0.0446-0.0585 N, R² > 0.99, "
                     "slope within ±20 %", {"rmse": rmse.tolist(), "r2": r2.tolist(), "slope": slope.tolist()})
 
 
@@ -312,10 +316,10 @@ def tree_and_gpr_fluctuate(probe: CapacitiveProbe) -> Measured:
         smooth = max(rough["linear_regression"].mean(), rough["svr"].mean())
         ratio[configuration] = {n: float(rough[n].mean() / smooth) for n in ("decision_tree", "gaussian_process")}
         accurate[configuration] = {n: bool(r2[n].mean() > 0.99) for n in ("decision_tree", "gaussian_process")}
-        parts.append(f"{configuration}: " + ", ".join(f"{n} {mean_sd(v, 4)} N" for n, v in rough.items()) +
+        parts.append(f"{configuration}: " + ", ".join(f"{n} {format_mean_sd(v, '.4f')} N" for n, v in rough.items()) +
                      f"; tree / linear {ratio[configuration]['decision_tree']:.1f}, GPR / linear "
                      f"{ratio[configuration]['gaussian_process']:.1f} (GPR test R² "
-                     f"{mean_sd(r2['gaussian_process'], 4)})")
+                     f"{format_mean_sd(r2['gaussian_process'], '.4f')})")
     holds = all(ratio["paper-configured"][n] > 2.0 and accurate["paper-configured"][n]
                 for n in ("decision_tree", "gaussian_process"))
     return Measured(f"rms departure from a cubic over a {SWEEP_PRESSES}-press sweep 0.1-3 N (paper's split, seeds "
@@ -330,6 +334,7 @@ def labels_stay_consistent(probe: CapacitiveProbe) -> Measured:
     runs = [r["metrics"] for r in probe.tracking.values()]
     idf1, switches = [m["idf1"] for m in runs], [m["id_switches"] for m in runs]
     holds = bool(np.mean(idf1) >= 0.9)
-    return Measured(f"sessions stream (tap, hold, glide, cross, merge, split), our tracker: IDF1 {mean_sd(idf1, 3)}, "
-                    f"identity switches {mean_sd(switches, 1)} per stream (seeds {_seeds(probe)})", holds,
+    return Measured(f"sessions stream (tap, hold, glide, cross, merge, split), our tracker: IDF1 "
+                    f"{format_mean_sd(idf1, '.3f')}, identity switches {format_mean_sd(switches, '.1f')} per stream "
+                    f"(seeds {_seeds(probe)})", holds,
                     "IDF1 >= 0.9", {"idf1": idf1, "id_switches": switches})

@@ -52,8 +52,7 @@ def single_point_protocol(cfg, seeds=(0, 1, 2), ramp_forces_n=RAMP_FORCES_N, ref
     error and r at the reference forces: per seed and as mean +- sd over seeds. `reconstruction`:
     what runs/studies/ert_tests.py `calibrate` takes (`kind` and its settings; None: Tikhonov with
     its defaults, alpha chosen on validation presses per layout)."""
-    with tempfile.TemporaryDirectory() as folder:
-        frame, extra = single_point_study(cfg, folder, seeds, None, reconstruction, tuple(ramp_forces_n), n_blank)
+    frame, extra = single_point_study(cfg, seeds, None, reconstruction, tuple(ramp_forces_n), n_blank)
     loq = {row["seed"]: row["loq_n"] for row in extra["loq"]}
     per_seed = []
     for seed, part in frame.groupby("seed"):

@@ -25,12 +25,13 @@ from pathlib import Path
 import numpy as np
 from omegaconf import OmegaConf
 
+from common.spread import format_mean_sd, mean_and_sd
 from data.physics.force_sensing_resistor import fsr_force_n
 from data.preprocessing.virtual_force_levels import fit_cubic, window_features
 from data.preprocessing.windows import cut_windows, decimate
 from data.scenes.fingertip import FingertipScene
 from data.scenes.fingertip_boards import BOARD_SETS
-from runs.fidelity.observations import SEEDS, Measured, judged_over_seeds, mean_sd, observation, probe, seeds_label
+from runs.fidelity.observations import SEEDS, Measured, judged_over_seeds, observation, probe, seeds_label
 
 ROOT = Path(__file__).resolve().parents[2]
 PAPER_COMBINED18 = ([(m, t) for m in ("silk", "paper") for t in ("flat", "circular_4mm", "circular_6mm",
@@ -127,7 +128,7 @@ def algorithm1_diagnostic(probe: FingertipProbe) -> dict:
         if isinstance(parts[0], dict):
             return {key: combine([part[key] for part in parts], reduce) for key in parts[0]}
         return float(reduce(np.asarray(parts)))
-    return {**combine(at_seed, np.mean), "sd": combine(at_seed, lambda v: v.std(ddof=1) if v.size > 1 else 0.0),
+    return {**combine(at_seed, np.mean), "sd": combine(at_seed, lambda v: mean_and_sd(v)[1]),
             "seeds": probe.seeds}
 
 
@@ -193,8 +194,9 @@ def triboelectric_separates_at_one_level(probe: FingertipProbe) -> Measured:
     def separates(at_one, across):
         return (at_one >= 2 * chance) & (at_one >= 1.3 * across)
     return judged_over_seeds(
-        f"nearest class mean on f1 = mean abs(X_TE) (materials10, per recording): {mean_sd(100 * one_level, 0)} % at "
-        f"one force level (mean of {n_levels[0]:.0f}), {mean_sd(100 * pooled, 0)} % pooled over levels; chance "
+        f"nearest class mean on f1 = mean abs(X_TE) (materials10, per recording): "
+        f"{format_mean_sd(100 * one_level, '.0f')} % at one force level (mean of {n_levels[0]:.0f}), "
+        f"{format_mean_sd(100 * pooled, '.0f')} % pooled over levels; chance "
         f"{100 * chance:.0f} % ({seeds_label(probe.seeds)}, mean ± sd)", separates(one_level, pooled),
         separates(one_level.mean(), pooled.mean()), "one level >= 2 x chance and >= 1.3 x pooled", probe.seeds,
         {"one_level": float(one_level.mean()), "pooled": float(pooled.mean()), "chance": chance,
@@ -228,9 +230,10 @@ def force_and_texture_in_both_channels(probe: FingertipProbe) -> Measured:
     force_error, current_hits, force_hits = np.array([force_error_and_hits(one) for one in probe.seeded]).T
     fewest = np.minimum(current_hits, force_hits)
     return judged_over_seeds(
-        f"calibrated max X_PR within {mean_sd(100 * force_error, 1)} % of the force level (median window); dominant line "
-        f"at v / period (±5 %) on {mean_sd(current_hits, 1)} of 12 ridged boards in the current, "
-        f"{mean_sd(force_hits, 1)} of 12 in the force (10 N; {seeds_label(probe.seeds)}, mean ± sd)",
+        f"calibrated max X_PR within {format_mean_sd(100 * force_error, '.1f')} % of the force level "
+        f"(median window); dominant line at v / period (±5 %) on {format_mean_sd(current_hits, '.1f')} of 12 "
+        f"ridged boards in the current, "
+        f"{format_mean_sd(force_hits, '.1f')} of 12 in the force (10 N; {seeds_label(probe.seeds)}, mean ± sd)",
         (force_error < 0.05) & (fewest >= 10), force_error.mean() < 0.05 and fewest.mean() >= 10,
         "force within 5 %; v / period in both channels on >= 10 of 12 boards", probe.seeds,
         {"force_error": float(force_error.mean()), "hits": {channels[0]: float(current_hits.mean()),

@@ -16,8 +16,6 @@ from pathlib import Path
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
-from common.spread import format_mean_sd
-
 ROOT = Path(__file__).resolve().parents[2]
 # seed 000, 003, 001, 002, 004 (../shared/notes/seed-observations.md)
 CHECKS: dict[str, list] = {"rubber12": [], "fingertip": [], "capacitive6x6": [], "ert": [], "taxels": []}
@@ -97,10 +95,6 @@ def run_checks(scene: str, probe) -> list[Row]:
         name, number, statement, paper = fn.observation
         rows.append(Row(name, number, statement, paper, fn(probe)))
     return rows
-
-
-def mean_sd(values, digits=2) -> str:
-    return format_mean_sd(values, f".{digits}f")
 
 
 def seeds_label(seeds) -> str:

@@ -19,10 +19,11 @@ from functools import cached_property
 
 import numpy as np
 
+from common.spread import format_mean_sd
 from data.preprocessing.features import FEATURE_GROUPS, compute_features
 from data.scenes.rubber12 import Rubber12Scene
 from data.scenes.rubber12_effects import FIELD_EFFECTS
-from runs.fidelity.observations import SEEDS, Measured, judged_over_seeds, mean_sd, observation, probe, seeds_label
+from runs.fidelity.observations import SEEDS, Measured, judged_over_seeds, observation, probe, seeds_label
 
 
 # -- rubber12 ------------------------------------------------------------------------------------
@@ -133,7 +134,8 @@ def repeat_cv(probe: SceneProbe) -> Measured:
         readings, _ = one.repeat_noise
         return (readings.std(axis=1, ddof=1) / readings.mean(axis=1)).max()
     worst = _by_seed(probe, worst_cv)
-    return judged_over_seeds(f"largest CV {mean_sd(100 * worst)} % (P1-P9 at {np.median(probe.depths_mm):.2f} mm, "
+    return judged_over_seeds(f"largest CV {format_mean_sd(100 * worst)} % "
+                             f"(P1-P9 at {np.median(probe.depths_mm):.2f} mm, "
                              f"{probe.repeats} repeats, every listed effect; {_seeds(probe)}, mean ± sd)",
                              (0.0 < worst) & (worst < 0.023), 0.0 < worst.mean() < 0.023, "0 < CV < 2.3 %",
                              probe.seeds, {"max_cv": float(worst.mean()), "by_seed": {"max_cv": worst.tolist()}})
@@ -149,7 +151,8 @@ def nonlinear_depth(probe: SceneProbe) -> Measured:
             deviation.append(np.abs(curve - fit).max() / max(np.ptp(curve), 1e-300))
         return np.median(deviation)
     median = _by_seed(probe, median_departure)
-    return judged_over_seeds(f"aggregate change departs from its best straight line by {mean_sd(100 * median, 1)} % "
+    return judged_over_seeds(f"aggregate change departs from its best straight line by "
+                             f"{format_mean_sd(100 * median, '.1f')} % "
                              f"of its span (median of P1-P9; {_seeds(probe)}, mean ± sd)", median >= 0.05,
                              median.mean() >= 0.05, "departure >= 5 % of span", probe.seeds,
                              {"median_departure": float(median.mean()), "by_seed": {"median_departure": median.tolist()}})
@@ -170,7 +173,8 @@ def force_varies_with_position(probe: SceneProbe) -> Measured:
         return pressure.std(axis=0, ddof=1) / pressure.mean(axis=0)
     cv = _by_seed(probe, cv_by_depth)                       # (seeds, depths)
     return judged_over_seeds("CV of pressure over P1-P9: " + ", ".join(
-        f"{d:g} mm {mean_sd(100 * c, 1)} %" for d, c in zip(FORCE_DEPTHS_MM, cv.T)) + f" ({_seeds(probe)}, mean ± sd)",
+        f"{d:g} mm {format_mean_sd(100 * c, '.1f')} %" for d, c in zip(FORCE_DEPTHS_MM, cv.T))
+        + f" ({_seeds(probe)}, mean ± sd)",
         cv.min(axis=1) >= 0.10, cv.mean(axis=0).min() >= 0.10, "CV >= 10 % at every depth", probe.seeds,
         {"min_cv": float(cv.mean(axis=0).min()), "by_seed": {"min_cv": cv.min(axis=1).tolist()}})
 
@@ -180,7 +184,7 @@ def force_varies_with_position(probe: SceneProbe) -> Measured:
 def pressure_is_not_depth(probe: SceneProbe) -> Measured:
     corr = _by_seed(probe, lambda one: np.corrcoef(one.lab_table.frame["pressure_pa"],
                                                     one.lab_table.frame["depth_mm"])[0, 1])
-    return judged_over_seeds(f"corr(pressure, depth) = {mean_sd(corr, 4)} on the lab protocol "
+    return judged_over_seeds(f"corr(pressure, depth) = {format_mean_sd(corr, '.4f')} on the lab protocol "
                              f"({len(probe.lab_table.frame)} presses; {_seeds(probe)}, mean ± sd)", corr < 0.99,
                              corr.mean() < 0.99, "correlation < 0.99", probe.seeds,
                              {"corr": float(corr.mean()), "by_seed": {"corr": corr.tolist()}})
@@ -197,8 +201,9 @@ def corners_least_sensitive(probe: SceneProbe) -> Measured:
     s = _by_seed(probe, _sensitivity_per_mm)                # (seeds, points)
     corners, edges, centre = s[:, CORNERS], s[:, EDGE_MIDPOINTS], s[:, CENTRE]
     mean = s.mean(axis=0)
-    return judged_over_seeds(f"aggregate |ΔR/R| per mm: corners {mean_sd(100 * corners.mean(axis=1))} %, edge midpoints "
-                             f"{mean_sd(100 * edges.mean(axis=1))} %, centre {mean_sd(100 * centre)} % "
+    return judged_over_seeds(f"aggregate |ΔR/R| per mm: corners {format_mean_sd(100 * corners.mean(axis=1))} %, "
+                             f"edge midpoints {format_mean_sd(100 * edges.mean(axis=1))} %, "
+                             f"centre {format_mean_sd(100 * centre)} % "
                              f"({_seeds(probe)}, mean ± sd)", corners.max(axis=1) < centre,
                              mean[CORNERS].max() < mean[CENTRE], "every corner below P5", probe.seeds,
                              {"corner_max": float(mean[CORNERS].max()), "corner_mean": float(mean[CORNERS].mean()),
@@ -223,9 +228,10 @@ def centre_widest_range(probe: SceneProbe) -> Measured:
     top_range, top_snr = dynamic_range.mean(axis=0).argmax(), snr.mean(axis=0).argmax()
     at_seed = (dynamic_range.argmax(axis=1) == CENTRE) & (snr.argmax(axis=1) == CENTRE)
     return judged_over_seeds(
-        f"largest single-channel span 0.3-3 mm: P5 {mean_sd(100 * dynamic_range[:, CENTRE])} %, largest "
-        f"P{top_range + 1} {mean_sd(100 * dynamic_range[:, top_range])} %; SNR P5 {mean_sd(snr[:, CENTRE], 0)}, "
-        f"highest P{top_snr + 1} {mean_sd(snr[:, top_snr], 0)} ({_seeds(probe)}, mean ± sd; largest span at "
+        f"largest single-channel span 0.3-3 mm: P5 {format_mean_sd(100 * dynamic_range[:, CENTRE])} %, largest "
+        f"P{top_range + 1} {format_mean_sd(100 * dynamic_range[:, top_range])} %; SNR P5 "
+        f"{format_mean_sd(snr[:, CENTRE], '.0f')}, highest P{top_snr + 1} {format_mean_sd(snr[:, top_snr], '.0f')} "
+        f"({_seeds(probe)}, mean ± sd; largest span at "
         + "/".join(f"P{i + 1}" for i in dynamic_range.argmax(axis=1)) + ", highest SNR at "
         + "/".join(f"P{i + 1}" for i in snr.argmax(axis=1)) + ")",
         at_seed, top_range == CENTRE and top_snr == CENTRE, "P5 largest of P1-P9 in both", probe.seeds,
@@ -257,7 +263,8 @@ def mirror_ambiguity_worst_at_edges(probe: SceneProbe) -> Measured:
         return ratio
     edge, centre = _by_seed(probe, edge_and_centre).T
     return judged_over_seeds(f"difference of presses ±2.5 mm across a centreline / press signal: near an edge "
-                             f"midpoint {mean_sd(edge, 3)}, at the centre {mean_sd(centre, 3)} ({_seeds(probe)}, "
+                             f"midpoint {format_mean_sd(edge, '.3f')}, "
+                             f"at the centre {format_mean_sd(centre, '.3f')} ({_seeds(probe)}, "
                              f"mean ± sd)", edge < centre, edge.mean() < centre.mean(), "smaller near the edge midpoint",
                              probe.seeds, {"edge": float(edge.mean()), "centre": float(centre.mean()),
                                            "by_seed": {"edge": edge.tolist(), "centre": centre.tolist()}})
@@ -269,7 +276,7 @@ def depth_weak_at_small_depths(probe: SceneProbe) -> Measured:
         slope = np.diff(_aggregate(one.curves[0]), axis=1) / np.diff(one.depths_mm)
         return (slope[:, 0] / slope.mean(axis=1)).mean()
     shallow = _by_seed(probe, shallow_ratio)
-    return judged_over_seeds(f"slope of the aggregate change at 0.3-0.6 mm = {mean_sd(shallow)} x its mean over "
+    return judged_over_seeds(f"slope of the aggregate change at 0.3-0.6 mm = {format_mean_sd(shallow)} x its mean over "
                              f"0.3-3.0 mm (mean of P1-P9; {_seeds(probe)}, mean ± sd)", shallow < 1.0,
                              shallow.mean() < 1.0, "ratio < 1", probe.seeds,
                              {"shallow_ratio": float(shallow.mean()), "by_seed": {"shallow_ratio": shallow.tolist()}})
@@ -283,7 +290,8 @@ def pressure_is_aggregate(probe: SceneProbe) -> Measured:
         return (change.sum(axis=1) ** 2 / (change ** 2).sum(axis=1)).mean()
     effective = _by_seed(probe, effective_channels)
     n_channels = probe.curves[0].shape[-1]
-    return judged_over_seeds(f"effective number of channels carrying the change at 3 mm: {mean_sd(effective, 1)} of "
+    return judged_over_seeds(f"effective number of channels carrying the change at 3 mm: "
+                             f"{format_mean_sd(effective, '.1f')} of "
                              f"{n_channels} (mean of P1-P9; {_seeds(probe)}, mean ± sd)", effective >= 3.0,
                              effective.mean() >= 3.0, ">= 3 channels", probe.seeds,
                              {"effective_channels": float(effective.mean()),
@@ -298,7 +306,8 @@ def saturation_at_high_force(probe: SceneProbe) -> Measured:
         per_pa = np.diff(_aggregate(relative), axis=1) / np.diff(pressure, axis=1)
         return (per_pa[:, -1] / per_pa[:, per_pa.shape[1] // 2]).mean()
     ratio = _by_seed(probe, deepest_over_middle)
-    return judged_over_seeds(f"d(aggregate change)/d(pressure) at the deepest step = {mean_sd(ratio)} x that at mid "
+    return judged_over_seeds(f"d(aggregate change)/d(pressure) at the deepest step = {format_mean_sd(ratio)} x that "
+                             f"at mid "
                              f"depth (mean of P1-P9; {_seeds(probe)}, mean ± sd)", ratio < 1.0, ratio.mean() < 1.0,
                              "ratio < 1", probe.seeds, {"ratio": float(ratio.mean()), "by_seed": {"ratio": ratio.tolist()}})
 
@@ -334,7 +343,7 @@ def uncertainty_pattern(probe: SceneProbe) -> Measured:
     names = ("boundary / centre", "shallow / intermediate depth", "high / intermediate pressure")
     r = _by_seed(probe, ratios)                                 # (seeds, 3)
     return judged_over_seeds(f"tree spread out of fold ({_seeds(probe)}, mean ± sd): " +
-                             ", ".join(f"{n} {mean_sd(v)}" for n, v in zip(names, r.T)),
+                             ", ".join(f"{n} {format_mean_sd(v)}" for n, v in zip(names, r.T)),
                              (r > 1.0).all(axis=1), bool((r.mean(axis=0) > 1.0).all()), "every ratio > 1", probe.seeds,
                              {**{n: float(v) for n, v in zip(names, r.mean(axis=0))}, "by_seed": r.tolist()})
 
@@ -368,7 +377,8 @@ def extra_trees_r2(probe: SceneProbe) -> Measured:
                            table.frame[table.target_columns].to_numpy(), one.params["seed"])
     scores = _by_seed(probe, test_r2)                           # (seeds, targets)
     r2 = scores.mean(axis=0)
-    return judged_over_seeds("R² " + ", ".join(f"{n} {mean_sd(v, 3)}" for n, v in zip(("x", "y", "z", "P"), scores.T)) +
+    return judged_over_seeds("R² " + ", ".join(f"{n} {format_mean_sd(v, '.3f')}"
+                                               for n, v in zip(("x", "y", "z", "P"), scores.T)) +
                              f" ({len(probe.lab_table.frame)} lab presses, 100 trees on standardised targets, physics "
                              f"features, a random hold-out per seed, {_seeds(probe)})",
                              (np.abs(scores - PAPER_TABLE_II) <= 0.1).all(axis=1),

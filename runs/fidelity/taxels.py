@@ -22,6 +22,7 @@ from functools import cached_property
 
 import numpy as np
 
+from common.spread import mean_and_sd
 from data.scenes.taxels import TaxelsScene
 from data.scenes.taxels_effects import READING_EFFECTS
 from runs.fidelity.observations import Measured, observation, probe, scene_params
@@ -33,11 +34,6 @@ FIG4_THICKNESS_UM = (150.0, 200.0, 300.0, 400.0, 580.0, 700.0, 850.0, 1000.0)  #
 NEEDLE_FORCE_MN = 10.0
 SCAN_POINTS = 1201
 RATIO_TOLERANCE = 0.30
-
-
-def _spread(values) -> tuple[float, float]:
-    values = np.asarray(values, dtype=float)
-    return float(values.mean()), float(values.std(ddof=1)) if len(values) > 1 else 0.0
 
 
 @probe("taxels")
@@ -77,7 +73,7 @@ class TaxelsProbe:
             x, strain, _, centre = self.scan(FIG2_THICKNESS_UM, seed)
             ratios.append(profile_metrics(x, strain[:, 2], centre)["ratio"])
             shears.append(shear_sensitivity(strain))
-        return {"ratio": _spread(ratios), "shear_sensitivity": _spread(shears)}
+        return {"ratio": mean_and_sd(ratios), "shear_sensitivity": mean_and_sd(shears)}
 
     def variant(self, config: str) -> dict:
         """The composed config of a surface-structure variant (configs/scene/<config>.yaml)."""
@@ -165,7 +161,7 @@ def bump_raises_lateral_sensitivity(probe: TaxelsProbe) -> Measured:
         responses = [np.abs(_scene(p).simulate(x, y, 0.0, 1.0, 0.0).frame.gamma_x_t0).mean()
                      for p in (with_bumps, flat)]
         gains.append(responses[0] / responses[1])
-    mean, sd = _spread(gains)
+    mean, sd = mean_and_sd(gains)
     return Measured(f"mean |γ_x| per unit shear under a 3 mm probe, bumps / flat: {mean:.2f} ± {sd:.2f} "
                     "(3 sets of 200 probe positions)", bool(min(gains) > 1.0), "> 1 in every set (the paper's direction)",
                     {"gain": [mean, sd]})

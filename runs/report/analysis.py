@@ -15,6 +15,7 @@ from sklearn.metrics import r2_score
 
 from common.progress import progress as progress_bar
 from data.preprocessing.features import enabled_groups
+from models.capabilities import fit
 from models.uncertainty import coverage
 
 
@@ -78,7 +79,7 @@ def feature_ablation(estimator, datamodule, progress=True) -> dict:
 
     def test_r2(chosen):
         X, _ = datamodule.features_for(chosen)
-        model = clone(estimator).fit(X[datamodule.train_idx], y_train, X[X_val_rows], y_val)
+        model = fit(clone(estimator), X[datamodule.train_idx], y_train, X[X_val_rows], y_val)
         predicted = model.predict(X[datamodule.test_idx]).reshape(y_test.shape)
         return np.array([r2_score(y_test[:, k], predicted[:, k]) for k in range(len(targets))])
 

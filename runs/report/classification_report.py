@@ -9,9 +9,9 @@ import numpy as np
 import pandas as pd
 
 from common.atomic import atomic_write
-from models.deployable import PIPELINE_FILE, save_pipeline
 from runs.report import plots
 from runs.report.figure_files import write_figures
+from runs.report.regression_report import write_pipeline
 
 log = logging.getLogger(__name__)
 
@@ -54,7 +54,7 @@ def write_classification_report(result, output_dir, logger) -> None:
     ], ignore_index=True)
     atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
     write_figures(output_dir, figures, logger)
-    save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
+    write_pipeline(result.pipeline, output_dir)
     val, test = metrics["val"], metrics["test"]
     log.info("%s (%d parameters) fitted in %.1f s: validation accuracy %.4f (macro-F1 %.4f, loss %.4f%s); "
              "test accuracy %.4f (macro-F1 %.4f, loss %.4f%s)",

@@ -34,7 +34,8 @@ def json_safe(value):
 
 
 def mean_sd(values) -> dict:
-    """{"mean", "sd", "n"} of repeated measurements (sd with ddof 1; 0 for one value)."""
+    """The record metrics.json keeps of repeated measurements, {"mean", "sd", "n"}: common/spread.py's
+    mean and sd (ddof 1; 0 for one value) with how many there were."""
     mean, sd = mean_and_sd(values)
     return {"mean": mean, "sd": sd, "n": int(np.size(values))}
 

@@ -29,6 +29,7 @@ from hydra.experimental.callback import Callback
 
 from common.atomic import atomic_write, atomic_write_text
 from common.run_status import run_status
+from common.spread import format_mean_and_sd
 
 log = logging.getLogger(__name__)
 
@@ -160,13 +161,6 @@ def summarise(jobs: pd.DataFrame) -> pd.DataFrame:
     return frame.sort_values("val_score_mean", ascending=False, na_position="last").reset_index(drop=True)
 
 
-def _mean_sd(row, column, fmt) -> str:
-    mean, sd = row[f"{column}_mean"], row[f"{column}_sd"]
-    if not np.isfinite(mean):
-        return "—"
-    return format(mean, fmt) + (f" ± {format(sd, fmt)}" if np.isfinite(sd) else "")
-
-
 def markdown(summary: pd.DataFrame, jobs: pd.DataFrame, parallel_warning: bool, note: str = "") -> str:
     metric = summary["score_metric"].iloc[0] if len(summary) else "score"
     lines = [f"# Accuracy vs cost: validation {metric} ranks and marks the front; test is for reporting only", ""]
@@ -187,11 +181,14 @@ def markdown(summary: pd.DataFrame, jobs: pd.DataFrame, parallel_warning: bool, 
         size = f"{r['model_size_bytes_mean'] / 1e6:.1f}" if np.isfinite(r["model_size_bytes_mean"]) else "—"
         over_splits = ""
         if splits:
-            over_splits = (f"{r['test_splits_mean']:.4f} ± {r['test_splits_sd']:.4f} ({int(r['n_splits'])} splits) | "
-                           if np.isfinite(r["test_splits_mean"]) else "— | ")
-        lines.append(f"| {r['label']} | {r['n_seeds']} | {_mean_sd(r, 'val_score', '.4f')} "
-                     f"| {_mean_sd(r, 'test_score', '.4f')} | {over_splits}{_mean_sd(r, 'fit_time_s', '.2f')} "
-                     f"| {_mean_sd(r, 'latency_p50_us', ',.0f')} | {size} "
+            over_splits = (f"{format_mean_and_sd(r['test_splits_mean'], r['test_splits_sd'], '.4f')} "
+                           f"({int(r['n_splits'])} splits) | " if np.isfinite(r["test_splits_mean"]) else "— | ")
+        # over the seeds; one seed has no sd (the mean alone), a cost never measured reads —
+        val, test, fit_time, latency = (
+            format_mean_and_sd(r[f"{column}_mean"], r[f"{column}_sd"], spec, missing="—")
+            for column, spec in (("val_score", ".4f"), ("test_score", ".4f"), ("fit_time_s", ".2f"),
+                                 ("latency_p50_us", ",.0f")))
+        lines.append(f"| {r['label']} | {r['n_seeds']} | {val} | {test} | {over_splits}{fit_time} | {latency} | {size} "
                      f"| {'★' if r['pareto_fit_time'] else ''} | {'★' if r['pareto_latency'] else ''} |")
     failed = jobs[jobs["status"] != "ok"]
     if len(failed):

@@ -10,6 +10,7 @@ from pathlib import Path
 import pandas as pd
 
 from common.atomic import atomic_write
+from models.capabilities import capabilities
 from models.deployable import PIPELINE_FILE, save_pipeline
 from runs.report import plots
 from runs.report.analysis import format_ablation
@@ -96,6 +97,16 @@ def _log_summary(metrics, output_dir) -> None:
                  format_ablation(metrics["ablation"]))
 
 
+def write_pipeline(pipeline, output_dir: Path) -> None:
+    """pipeline.npz, for a model whose fitted state is storable; a library estimator's is not
+    (models/capabilities.py): its run deploys model.onnx alone."""
+    if capabilities(pipeline.model).storable:
+        save_pipeline(pipeline, output_dir / PIPELINE_FILE)
+    else:
+        log.info("%s: no %s (a library estimator's fitted state is not stored); model.onnx is what this run deploys",
+                 type(pipeline.model).__name__, PIPELINE_FILE)
+
+
 def write_regression_report(result, output_dir, logger, feature_names) -> None:
     output_dir = Path(output_dir)
     figures = regression_figures(result, feature_names)
@@ -103,5 +114,5 @@ def write_regression_report(result, output_dir, logger, feature_names) -> None:
     frame = _predictions_frame(result)
     atomic_write(output_dir / "predictions.csv", lambda tmp: frame.to_csv(tmp, index=False))
     write_figures(output_dir, figures, logger)
-    save_pipeline(result.pipeline, output_dir / PIPELINE_FILE)
+    write_pipeline(result.pipeline, output_dir)
     _log_summary(result.metrics, output_dir)

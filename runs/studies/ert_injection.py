@@ -26,8 +26,7 @@ from data.physics.optimal_injection import (
     perturbation_operator,
     recruit_pairs,
 )
-from data.scenes.ert import patch_weights
-from models.tikhonov_reconstruction import TikhonovReconstruction
+from models.ert.tikhonov import TikhonovReconstruction
 from runs.report.figure_files import write_figures
 from runs.report.plots import readable_log_axis
 from runs.studies.ert_tests import PAPER_NAME, _plain, scene_for
@@ -42,9 +41,7 @@ PAPER = {"pairs_recruited": 94, "iterations": 8, "operator_error_reduction_pct":
 def recruitment_for(scene, max_iterations: int, tie_tolerance: float, score: str = "leading_subspace"):
     """Recruitment on the scene's nominal sensor (no sensor effects)."""
     nominal = scene_for_nominal(scene)
-    solver = nominal._solver(nominal.sensor())
-    weights = patch_weights(solver.solver.grid.node_xy_mm, nominal.side_mm, nominal.patch_mm)
-    operator = perturbation_operator(solver.transfer_resistance_jacobian(weights))
+    operator = perturbation_operator(nominal.transfer_jacobian(nominal.sensor()))
     return recruit_pairs(operator, nominal.n_electrodes, max_iterations=max_iterations, tie_tolerance=tie_tolerance,
                          score=score)
 
@@ -94,7 +91,7 @@ def run_injection(cfg, output_dir, logger, seeds=(0, 1, 2), max_iterations=300, 
             rows.append({"seed": seed, "order": name, "pairs": int(k), "frame_ms": 1e3 * frame_s, "fps": 1.0 / frame_s,
                          "localisation_mm": float(error.mean()),
                          "force_abs_error_n": float(np.abs(prediction[:, 2] - test.targets[:, 2]).mean()),
-                         "val_localisation_mm": float(model.validation_scores_.min(axis=0)[0])})
+                         "val_localisation_mm": model.validation_localisation_mm()})
     table = pd.DataFrame(rows)
     summary = table.groupby(["order", "pairs"]).agg(
         fps=("fps", "first"), localisation_mm=("localisation_mm", "mean"), localisation_sd_mm=("localisation_mm", "std"),

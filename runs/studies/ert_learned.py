@@ -152,7 +152,7 @@ def run_learned(cfg, output_dir, logger, seeds=(0, 1, 2), n_train=3000, models=N
                           **extra).generate()
         _, tikhonov = calibrate(cfg, seed, _plain(calibration) or {}, _plain(reconstruction) or {})
         rows.append({"seed": seed, "model": "tikhonov", **_scores(tikhonov.predict(test.channels), test.targets),
-                     "val_localisation_mm": float(tikhonov.validation_scores_.min(axis=0)[0])})
+                     "val_localisation_mm": tikhonov.validation_localisation_mm()})
         # Held out: whole recordings (with one recording, groups are presses).
         groups = np.asarray(train.groups)
         order = np.random.default_rng(seed).permutation(np.unique(groups))

@@ -7,8 +7,9 @@ scene in `cfg.scene`.
 
 Each seed in `seeds` is one simulated sensor (its specimen variation and electrode errors) with
 its own noise: a calibration recording (protocol `calibration`) fits the Tikhonov reconstruction
-(models/tikhonov_reconstruction.py, alpha chosen on a validation split of the calibration), and
-separate recordings test it. Results are mean +- sd over presses per seed, then over seeds.
+(models/ert/tikhonov.py, alpha chosen on a validation split of the calibration), and
+separate recordings test it; `reconstruction.kind` picks another by its name in
+models/ert/registry.py. Results are mean +- sd over presses per seed, then over seeds.
 
 Limit of quantification: 10 x the sd of the force estimated on blank frames (nothing pressed;
 IUPAC, Currie, Anal. Chem. 40, 1968), divided by the indenter's area for a pressure. The paper's
@@ -32,11 +33,7 @@ from scipy import stats
 from common.atomic import atomic_write_text
 from common.errors import InputError
 from data.scenes.contract import random_generator_for
-from models.ert.gauss_newton import GaussNewtonReconstruction
-from models.ert.greit import GreitReconstruction
-from models.ert.learned_inverse import GreitLearnedInverse
-from models.ert.learned_readings_inverse import LearnedReadingsInverse
-from models.tikhonov_reconstruction import TikhonovReconstruction
+from models.ert.registry import RECONSTRUCTIONS, reconstruction_class
 from runs.report.figure_files import write_figures
 from runs.report.plots import panel_grid
 from runs.report.metrics_file import mean_sd
@@ -64,34 +61,22 @@ def scene_for(cfg, **overrides):
     return instantiate(node)
 
 
-RECONSTRUCTIONS = ("tikhonov", "gauss_newton", "greit", "greit_learned", "learned_mlp")
+# the paper's reconstruction: its settings are `reconstruction`'s plain keys, every other kind's
+# sit in a block named after it
+DEFAULT_KIND = "tikhonov"
 
 
 def fit_reconstruction(kind: str, cfg, seed: int, X, y, params: dict):
-    """A reconstruction of `kind` for sensor `seed` of the scene in `cfg`, its hyper-parameters
-    chosen (and Tikhonov's coefficient field fitted) on the validation presses (X, y): a
-    calibration recording, never test presses. GREIT, the learned inverse on it and the learned
-    MLP train on presses of other simulated sensors (never `seed`)."""
-    geometry = scene_for(cfg, seed=seed).geometry()
-    params = dict(params)
-    if kind == "tikhonov":
-        model = TikhonovReconstruction(geometry=geometry, seed=seed, **params)
-    elif kind == "gauss_newton":
-        model = GaussNewtonReconstruction(geometry=geometry, **params)
-    elif kind in ("greit", "greit_learned", "learned_mlp"):
-        training_scene = OmegaConf.to_container(cfg.scene, resolve=True)
-        if kind == "learned_mlp":
-            model = LearnedReadingsInverse(geometry=geometry, training_scene=training_scene, seed=seed, **params)
-        else:
-            learned = {k: params.pop(k) for k in ("half_width_px", "n_estimators", "max_features") if k in params}
-            model = GreitReconstruction(geometry=geometry, training_scene=training_scene, **params)
-        if seed in model.training_sensor_seeds():
-            raise InputError(f"{kind}: training_seed {model.training_seed} puts the sensor under test (seed {seed}) "
-                             f"among the training sensors; choose another training_seed")
-        if kind == "greit_learned":
-            model = GreitLearnedInverse(greit=model, seed=seed, **learned)
-    else:
-        raise InputError(f"reconstruction kind must be one of {', '.join(RECONSTRUCTIONS)}, got '{kind}'")
+    """The reconstruction registered as `kind` (models/ert/registry.py) for sensor `seed` of the
+    scene in `cfg`, its hyper-parameters chosen (and Tikhonov's coefficient field fitted) on the
+    validation presses (X, y): a calibration recording, never test presses. Those that train on
+    simulated presses (GREIT, the learned inverses) train on other sensors, never `seed`."""
+    model = reconstruction_class(kind).for_sensor(scene_for(cfg, seed=seed).geometry(),
+                                                  OmegaConf.to_container(cfg.scene, resolve=True), seed, **params)
+    seeds = model.training_sensor_seeds()
+    if seed in seeds:
+        raise InputError(f"{kind}: training_seed {seeds[0]} puts the sensor under test (seed {seed}) "
+                         f"among the training sensors; choose another training_seed")
     return model.fit(X, y)
 
 
@@ -104,40 +89,20 @@ def calibrate(cfg, seed, calibration: dict, reconstruction: dict):
     scene = scene_for(cfg, seed=seed, protocol="calibration", **calibration)
     table = scene.generate()
     params = dict(reconstruction)
-    kind = params.pop("kind", "tikhonov")
-    blocks = {name: params.pop(name) for name in RECONSTRUCTIONS[1:] if name in params}
-    chosen = params if kind == "tikhonov" else dict(blocks.get(kind) or {})
+    kind = params.pop("kind", DEFAULT_KIND)
+    blocks = {name: params.pop(name) for name in RECONSTRUCTIONS if name != DEFAULT_KIND and name in params}
+    chosen = params if kind == DEFAULT_KIND else dict(blocks.get(kind) or {})
     return scene, fit_reconstruction(kind, cfg, seed, table.channels, table.targets, chosen)
 
 
-def chosen_hyperparameters(model) -> dict:
-    """What a fitted reconstruction chose on its validation presses."""
-    if isinstance(model, TikhonovReconstruction):
-        return {"alpha_relative": model.alpha_relative_}
-    if isinstance(model, LearnedReadingsInverse):
-        return {"noise_weight": model.noise_weight_}
-    if isinstance(model, GreitLearnedInverse):
-        model = model.greit_
-    return {**model.params_, "threshold": model.threshold_}
-
-
-def validation_localisation_mm(model) -> float:
-    """The chosen setting's mean localisation error on the validation presses."""
-    if isinstance(model, TikhonovReconstruction):
-        return float(model.validation_scores_.min(axis=0)[0])
-    if isinstance(model, GreitLearnedInverse):
-        model = model.greit_
-    return min(row["localisation_mm"] for row in model.validation_scores_)
-
-
 def limit_of_quantification(cfg, seed, model, n_blank: int) -> dict:
-    blank = scene_for(cfg, seed=seed, protocol="blank", n_samples=n_blank).generate()
-    sd = float(model.predict(blank.channels)[:, 2].std(ddof=1))
-    area_mm2 = np.pi * (model.geometry["indenter_diameter_mm"] / 2.0) ** 2
+    scene = scene_for(cfg, seed=seed, protocol="blank", n_samples=n_blank)
+    sd = float(model.predict(scene.generate().channels)[:, 2].std(ddof=1))
+    area_mm2 = np.pi * (float(scene.indenter_diameter_mm) / 2.0) ** 2
     return {"loq_n": 10.0 * sd, "loq_kpa": 10.0 * sd / area_mm2 * 1e3}
 
 
-def single_point_study(cfg, output_dir, seeds=(0, 1, 2), calibration=None, reconstruction=None,
+def single_point_study(cfg, seeds=(0, 1, 2), calibration=None, reconstruction=None,
                        test_forces_n=(10.0,), n_blank=100) -> tuple[pd.DataFrame, dict]:
     """Presses on the 18 x 18 grid at `test_forces_n` for every seed: a frame of predictions."""
     rows, loq, val = [], [], []
@@ -153,8 +118,9 @@ def single_point_study(cfg, output_dir, seeds=(0, 1, 2), calibration=None, recon
         frame["error_mm"] = np.hypot(frame.x_pred_mm - frame.x_mm, frame.y_pred_mm - frame.y_mm)
         frame["force_error_n"] = frame.force_pred_n - frame.force_n
         rows.append(frame)
-        loq.append({"seed": seed, "chosen": chosen_hyperparameters(model), **limit_of_quantification(cfg, seed, model, n_blank)})
-        val.append(validation_localisation_mm(model))
+        loq.append({"seed": seed, "chosen": model.chosen_hyperparameters(),
+                    **limit_of_quantification(cfg, seed, model, n_blank)})
+        val.append(model.validation_localisation_mm())
     return pd.concat(rows, ignore_index=True), {"loq": loq, "val_localisation_mm": val}
 
 
@@ -163,7 +129,7 @@ def run_localisation(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None,
     """Single-point localisation (the ERT study's §5.1, fig. 12): error of the field's peak, presses
     above the limit of quantification only."""
     output_dir = Path(output_dir)
-    frame, extra = single_point_study(cfg, output_dir, seeds, calibration, reconstruction, (test_force_n,), n_blank)
+    frame, extra = single_point_study(cfg, seeds, calibration, reconstruction, (test_force_n,), n_blank)
     loq = {row["seed"]: row["loq_n"] for row in extra["loq"]}
     frame["above_loq"] = frame.force_n >= frame.seed.map(loq)
     used = frame[frame.above_loq]
@@ -189,7 +155,7 @@ def run_force(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, recons
               test_forces_n=(4.0, 8.0, 12.0), n_blank=100) -> dict:
     """Force estimation (the ERT study's §5.3, fig. 14): the field's integral against the reference."""
     output_dir = Path(output_dir)
-    frame, extra = single_point_study(cfg, output_dir, seeds, calibration, reconstruction, test_forces_n, n_blank)
+    frame, extra = single_point_study(cfg, seeds, calibration, reconstruction, test_forces_n, n_blank)
     per_seed = []
     for seed, part in frame.groupby("seed"):
         error = part.force_error_n.abs()
@@ -231,8 +197,9 @@ def run_two_point(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, re
     tables, distances = [], {}
     for seed in seeds:
         scene, model = calibrate(cfg, seed, _plain(calibration) or {}, _plain(reconstruction) or {})
-        if not isinstance(model, TikhonovReconstruction):
-            raise InputError("ert_two_point reads the calibrated pressure field: reconstruction.kind must be tikhonov")
+        if not model.offers_pressure_field:
+            raise InputError(f"ert_two_point reads the calibrated pressure field, which {type(model).__name__} does "
+                             f"not offer: reconstruction.kind must be tikhonov")
         two_point = scene_for(cfg, seed=seed, protocol="two_point", n_repeats=n_repeats)
         test = two_point.generate()
         readings = placed_by_hand(two_point, test, placement_sd_mm) if placement_sd_mm > 0 else test.channels

@@ -3,7 +3,7 @@
 Three mapping stages, all linear up to the last step, so a frame costs one matrix product:
 1. voltages -> conductance image: dsigma = Q dE with Q = (J^T J + alpha^2 Gamma^T Gamma)^-1 J^T
    (eq. 4), J the Jacobian of the readings with respect to each pixel's relative conductance at
-   the unloaded sheet (adjoint sensitivity, data/physics/sheet_conduction.py), Gamma the identity
+   the unloaded sheet (adjoint sensitivity, data/ert/jacobian.py), Gamma the identity
    or the pixel grid's Laplacian;
 2. a Gaussian deconvolution: the blur of a point press is modelled as a Gaussian point-spread
    function of sd `deconvolution_sigma_mm` (seed 002 assumes identical Gaussian kernels), and
@@ -23,12 +23,15 @@ mean diag(J^T J) / mean diag(Gamma^T Gamma).
 """
 import numpy as np
 from scipy.ndimage import correlate
-from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
+from data.ert.jacobian import pixel_sensitivity
+from data.ert.readings import transfer_basis
+from models.ert.image_readout import window_around_peak
 from models.ert.priors import pixel_laplacian
-from models.ert.readings import checked_voltages, pixel_sensitivity, transfer_basis
+from models.ert.reconstruction import ERTReconstruction, localisation_mm
+from models.ert.validation import checked_presses, checked_voltages, required_geometry
 
 
 def bilinear_matrix(n_out: int, n_in: int) -> np.ndarray:
@@ -58,12 +61,14 @@ def wiener_kernel(sigma_px: float, noise_to_signal: float, half_width: int, n: i
     return kernel / kernel.sum()      # keeps a flat image's level (and so the force scale)
 
 
-class TikhonovReconstruction(RegressorMixin, BaseEstimator):
+class TikhonovReconstruction(ERTReconstruction):
     """ERT voltages (changes from the unloaded frame) -> (x_mm, y_mm, force_n).
 
     `geometry` is the scene's nominal geometry (data.scenes.ert.ERTScene.geometry()): the
     reconstruction knows the drawn sensor, not the one the sensor effects made of it.
     """
+
+    offers_pressure_field = True
 
     def __init__(self, geometry=None, pixels_per_side=20, regulariser="laplacian",
                  alpha_relative=(1e-4, 1e-3, 1e-2, 1e-1, 1.0), deconvolution_sigma_mm=10.0,
@@ -88,8 +93,7 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
         return np.asarray(transfer_basis(self.geometry) @ pixel_sensitivity(self.geometry, self.pixels_per_side))
 
     def _check_params(self):
-        if self.geometry is None:
-            raise InputError("model.geometry is required: the scene's nominal geometry (ERTScene.geometry())")
+        required_geometry(self.geometry)
         alphas = np.atleast_1d(np.asarray(self.alpha_relative, dtype=float))
         if alphas.size == 0 or not np.all(np.isfinite(alphas)) or (alphas <= 0).any():
             raise InputError(f"model.alpha_relative must be positive, got {np.asarray(self.alpha_relative).tolist()}")
@@ -100,21 +104,12 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
                              f"{self.pixels_per_side} and {self.deconvolution_sigma_mm}")
         return alphas
 
-
     # -- fit ---------------------------------------------------------------------------------------
     def fit(self, X, y):
         """X: (n_presses, n_channels) calibration voltages; y: (n_presses, 3) x_mm, y_mm, force_n."""
         alphas = self._check_params()
         J = self.jacobian()
-        X = checked_voltages(X, J.shape[0])
-        y = np.asarray(y, dtype=float)
-        if y.ndim != 2 or y.shape[1] != 3 or len(y) != len(X):
-            raise InputError(f"calibration targets must have shape ({len(X)}, 3) (x_mm, y_mm, force_n), got {y.shape}")
-        usable = y[:, 2] >= self.quantification_limit_n
-        if usable.sum() < 4:
-            raise InputError(f"the calibration set has {int(usable.sum())} presses at or above the quantification "
-                             f"limit ({self.quantification_limit_n} N); at least 4 are needed")
-        X, y = X[usable], y[:, :3][usable]
+        X, y = checked_presses(X, y, J.shape[0], self.quantification_limit_n, role="calibration")
         n = self.pixels_per_side
         gamma = np.eye(n * n) if self.regulariser == "identity" else pixel_laplacian(n)
         jtj, gtg = J.T @ J, gamma.T @ gamma
@@ -137,8 +132,7 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
             images = self._deconvolve(X @ Q.T)
             W = self._coefficient_field(images[fit], y[fit, 2])
             xy, force = self._locate(images[val] * W)
-            error = np.hypot(*(xy - y[val, :2]).T).mean()
-            scores.append((error, np.abs(force - y[val, 2]).mean()))
+            scores.append((localisation_mm(xy, y[val]), np.abs(force - y[val, 2]).mean()))
         best = min(range(len(alphas)), key=lambda k: scores[k])
         self.alpha_relative_ = float(alphas[best])
         self.validation_scores_ = np.array(scores)
@@ -170,6 +164,12 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
         xy = np.column_stack([(index % m + 0.5) * step, (index // m + 0.5) * step])
         return xy, force_pixels.sum(axis=1)
 
+    def chosen_hyperparameters(self) -> dict:
+        return {"alpha_relative": self.alpha_relative_}
+
+    def validation_localisation_mm(self) -> float:
+        return float(self.validation_scores_.min(axis=0)[0])
+
     # -- predict -----------------------------------------------------------------------------------
     def force_pixels(self, X) -> np.ndarray:
         """(n_frames, n_pixels) force carried by each reconstruction pixel, in newtons."""
@@ -185,15 +185,10 @@ class TikhonovReconstruction(RegressorMixin, BaseEstimator):
         from it (sub-pixel position from how the load shares between neighbouring pixels) carries
         over between places; a drift of the base fabric adds only its small local share."""
         pixels = self.force_pixels(X)
-        n, h = self.pixels_per_side, int(half_width_px)
-        if h < 0:
+        n = self.pixels_per_side
+        if int(half_width_px) < 0:
             raise InputError(f"peak_window: half_width_px must be >= 0, got {half_width_px}")
-        images = np.pad(pixels.reshape(-1, n, n), ((0, 0), (h, h), (h, h)))
-        peak = pixels.argmax(axis=1)
-        iy, ix = peak // n, peak % n
-        offsets = np.arange(2 * h + 1)
-        window = images[np.arange(len(images))[:, None, None], iy[:, None, None] + offsets[None, :, None],
-                        ix[:, None, None] + offsets[None, None, :]].reshape(len(images), -1)
+        iy, ix, window = window_around_peak(pixels, n, half_width_px)
         pixel_mm = self.geometry["side_mm"] / n
         peak_xy_mm = np.column_stack([(ix + 0.5) * pixel_mm, (iy + 0.5) * pixel_mm])
         return peak_xy_mm, np.column_stack([peak_xy_mm, pixels.sum(axis=1), window])
