@@ -79,6 +79,8 @@ bench: install                ## every bench that records (many hours on 2 cores
 	$(BENCH_ENV) $(PY) bench/onnx_ppv_floor.py
 	$(BENCH_ENV) $(PY) bench/search_scaling.py
 	$(BENCH_ENV) $(PY) bench/ddp_step_time.py --repeats 3
+	$(BENCH_ENV) $(PY) bench/model_configs.py
+	$(BENCH_ENV) $(PY) bench/reproduce.py --recordings GunPoint
 	$(PY) docs/generate.py
 
 clean:
