@@ -141,7 +141,8 @@ class Recording:
 
     def finish(self) -> Path:
         load_after = os.getloadavg()[0]
-        status = _git("status", "--porcelain", "--untracked-files=no")
+        # results/ is what benches write, not code: a tree dirty only there measured committed code.
+        status = _git("status", "--porcelain", "--untracked-files=no", "--", ".", ":!results")
         common = {"schema": SCHEMA, "bench": self.bench, "command": self.command,
                   "commit": _git("rev-parse", "HEAD") or "unknown", "dirty": bool(status),
                   "lock_sha256": lock_sha256(), "measured_code": self.measured_code, "versions": _versions(),
