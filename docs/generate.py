@@ -45,7 +45,9 @@ def blocks(text: str, page: Path) -> list[tuple[str, int, int]]:
     inside a fenced code block are examples, not blocks: they are blanked out before the search."""
     text = FENCE.sub(lambda fence: re.sub(r"[^\n]", " ", fence.group()), text)
     found, position = [], 0
-    lines_before = lambda index: text.count("\n", 0, index) + 1  # noqa: E731
+
+    def lines_before(index: int) -> int:
+        return text.count("\n", 0, index) + 1
     while True:
         begin = BEGIN.search(text, position)
         stray_end = text.find(END, position)

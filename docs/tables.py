@@ -4,7 +4,8 @@ One function per generated block, registered under the block's name; each return
 markdown and the records it used (docs/generate.py writes their provenance under the table).
 Numbers are formatted here and only here: the same raw values always print the same digits.
 """
-from common.result_records import RESULTS, RecordError, changed_code, latest, read_records
+from common import result_records
+from common.result_records import RecordError, changed_code, latest, read_records
 from common.spread import format_mean_sd
 
 TABLES = {}
@@ -44,7 +45,7 @@ def seeds_label(seeds) -> str:
 def tour_records() -> list[dict]:
     """The newest record of each tour command, in the order the bench runs them."""
     names = []
-    for record in read_records(RESULTS / "quick_tour.jsonl"):
+    for record in read_records(result_records.RESULTS / "quick_tour.jsonl"):
         if record["name"] != "default_scores" and record["name"] not in names:
             names.append(record["name"])
     return [latest("quick_tour", name) for name in names]
@@ -96,11 +97,11 @@ VERDICT = {True: "holds", False: "does not hold", None: "not measured"}
 def fidelity_rows(scene: str) -> list[dict]:
     """The newest record of each of the scene's rows, in row order."""
     names = []
-    for record in read_records(RESULTS / "fidelity.jsonl"):
+    for record in read_records(result_records.RESULTS / "fidelity.jsonl"):
         if record["name"].startswith(f"{scene}/") and record["name"] not in names:
             names.append(record["name"])
     if not names:
-        raise RecordError(f"{RESULTS / 'fidelity.jsonl'}: no rows of scene {scene!r}")
+        raise RecordError(f"{result_records.RESULTS / 'fidelity.jsonl'}: no rows of scene {scene!r}")
     return [latest("fidelity", name) for name in names]
 
 
@@ -159,7 +160,7 @@ def results_index():
     """Each bench's newest run: when, what it cost, and whether the code it measured has moved."""
     lines = ["| results file | records | newest run | its duration | commit | state |", "|---|---|---|---|---|---|"]
     used = []
-    for path in sorted(RESULTS.glob("*.jsonl")):
+    for path in sorted(result_records.RESULTS.glob("*.jsonl")):
         records = read_records(path)
         newest = records[-1]
         run = [r for r in records if (r["date"], r["command"]) == (newest["date"], newest["command"])]
@@ -184,7 +185,7 @@ def spread_or_missing(values, spec: str) -> str:
 def tsc_peers_two_sets():
     """The bench-quick comparison: the same MiniRocket on the same official splits, ours and aeon's."""
     names = []
-    for record in read_records(RESULTS / "tsc_peers.jsonl"):
+    for record in read_records(result_records.RESULTS / "tsc_peers.jsonl"):
         if not record["name"].startswith("quick/") and record["name"] not in names:
             names.append(record["name"])
     records = [latest("tsc_peers", name) for name in names]
