@@ -61,8 +61,14 @@ def pads(path: Path, n: int = 240, seed: int = 0) -> Path:
     return path
 
 
+# One thread everywhere, whatever the caller's environment says: a float32 tree ensemble in
+# onnxruntime sums its trees in another order on more threads (last digits differ).
+SINGLE_THREAD = {"CI": "true", "TOUCHSTONE_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1",
+                 "OPENBLAS_NUM_THREADS": "1"}
+
+
 def python(arguments: list[str]) -> None:
-    done = subprocess.run([sys.executable, *arguments], cwd=ROOT, env={**os.environ, "CI": "true"},
+    done = subprocess.run([sys.executable, *arguments], cwd=ROOT, env={**os.environ, **SINGLE_THREAD},
                           capture_output=True, text=True)
     if done.returncode != 0:
         tail = (done.stderr or done.stdout).strip().splitlines()[-3:]
@@ -76,7 +82,7 @@ def onnx_predictions(folder: Path) -> dict | None:
         return None
     try:
         python(["predict.py", f"model={folder}/model.onnx", f"input={folder}/predictions.csv",
-                f"output={folder}/onnx_predictions.csv"])
+                f"output={folder}/onnx_predictions.csv", "threads=1"])
     except RuntimeError as error:           # a recordings model reads its NPZ, not a table
         return {"not_predicted": str(error)[-200:]}
     frame = pd.read_csv(folder / "onnx_predictions.csv")
