@@ -40,20 +40,18 @@ def seeds_label(seeds) -> str:
     return "seed " + ", ".join(map(str, seeds)) if len(seeds) == 1 else "seeds " + ", ".join(map(str, seeds))
 
 
+def newest(bench: str, keep=lambda name: True) -> list[dict]:
+    """The newest record of each name `keep` accepts, in the order the bench first wrote them."""
+    names = dict.fromkeys(record["name"] for record in read_records(result_records.RESULTS / f"{bench}.jsonl")
+                          if keep(record["name"]))
+    return [latest(bench, name) for name in names]
+
+
 # ---- the quick tour (bench/quick_tour.py) -------------------------------------------------------
-
-def tour_records() -> list[dict]:
-    """The newest record of each tour command, in the order the bench runs them."""
-    names = []
-    for record in read_records(result_records.RESULTS / "quick_tour.jsonl"):
-        if record["name"] != "default_scores" and record["name"] not in names:
-            names.append(record["name"])
-    return [latest("quick_tour", name) for name in names]
-
 
 @table("readme/tour")
 def quick_tour():
-    records = tour_records()
+    records = newest("quick_tour", lambda name: name != "default_scores")
     lines = ["| command | what it does | wall time | CPU time |", "|---|---|---|---|"]
     for record in records:
         values = record["values"]
@@ -96,13 +94,10 @@ VERDICT = {True: "holds", False: "does not hold", None: "not measured"}
 
 def fidelity_rows(scene: str) -> list[dict]:
     """The newest record of each of the scene's rows, in row order."""
-    names = []
-    for record in read_records(result_records.RESULTS / "fidelity.jsonl"):
-        if record["name"].startswith(f"{scene}/") and record["name"] not in names:
-            names.append(record["name"])
-    if not names:
-        raise RecordError(f"{result_records.RESULTS / 'fidelity.jsonl'}: no rows of scene {scene!r}")
-    return [latest("fidelity", name) for name in names]
+    records = newest("fidelity", lambda name: name.startswith(f"{scene}/"))
+    if not records:
+        raise RecordError(f"results/fidelity.jsonl: no rows of scene {scene!r}")
+    return records
 
 
 def fidelity_table(scene: str):
@@ -184,11 +179,7 @@ def spread_or_missing(values, spec: str) -> str:
 @table("tsc_peers/two_sets")
 def tsc_peers_two_sets():
     """The bench-quick comparison: the same MiniRocket on the same official splits, ours and aeon's."""
-    names = []
-    for record in read_records(result_records.RESULTS / "tsc_peers.jsonl"):
-        if not record["name"].startswith("quick/") and record["name"] not in names:
-            names.append(record["name"])
-    records = [latest("tsc_peers", name) for name in names]
+    records = newest("tsc_peers", lambda name: not name.startswith("quick/"))
     lines = ["| set | method | side | test accuracy | fit (s) | latency per recording (ms) | seeds |",
              "|---|---|---|---|---|---|---|"]
     for record in sorted(records, key=lambda r: (r["values"]["set"], r["values"]["method"])):
