@@ -6,7 +6,7 @@ predictions its exported ONNX file gives through predict.py; appended to results
     .venv/bin/python bench/model_configs.py --check --only regression/resmlp   # compare, record nothing
 
 A code change that should move no number (a refactor) is judged against these records:
-tests/test_model_configs.py (slow) re-runs every case and compares each printed digit.
+tests/bench/test_model_configs.py (slow) re-runs every case and compares each printed digit.
 Classification tables use a generated three-region pad table (written next to the runs); the
 recordings nets train two epochs on two passes per level (their numbers are for parity, not
 accuracy); studies run with their experiment's own settings.

@@ -217,7 +217,7 @@ def main(argv=None):
         elif args.epoch_curve:
             results = epoch_curve(args.epoch_curve, args.models, args.seeds, args.epochs or 1500, args.every,
                                   not args.skip_folds, args.curve_epochs)
-            # Another budget than the recipe's own is a check (tests/test_tsc_reference_bench.py runs
+            # Another budget than the recipe's own is a check (tests/bench/test_tsc_reference.py runs
             # one), not the measurement docs/training_recipes.md shows: it prints only.
             if args.epochs is None:
                 for model, values in results.items():

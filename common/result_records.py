@@ -15,6 +15,8 @@ renders every table of measured numbers; nothing else writes these files.
 A line that is not a whole record (truncated, hand-edited, a missing field) is refused with one
 line naming the file and the line: a table is never drawn from half a record.
 """
+import ast
+import functools
 import hashlib
 import json
 import math
@@ -27,6 +29,8 @@ from contextlib import contextmanager
 from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
+
+import yaml
 
 from common.atomic import atomic_write_text
 
@@ -56,26 +60,90 @@ def lock_sha256() -> str:
     return file_sha256(LOCK) if LOCK.is_file() else "no-lock"
 
 
-def code_sha256(path: str) -> str:
-    """Hash of the source a path names: a file's bytes, or every .py/.yaml file under a folder
-    (names and bytes, sorted), so a record can tell whether the code it measured has changed."""
+def _sources_now(path: str) -> dict[str, bytes]:
+    """The measured source files a path names today: the file itself, or every .py/.yaml file
+    under a folder (the recorder excepted), keyed by repository-relative name."""
     target = ROOT / path
     if target.is_file():
-        return file_sha256(target)
+        return {path: target.read_bytes()}
     if not target.is_dir():
         raise RecordError(f"measured code {path!r} does not exist under {ROOT}")
+    return {name: file.read_bytes() for file in sorted(target.rglob("*"))
+            if (name := file.relative_to(ROOT).as_posix()) and file.suffix in CODE_SUFFIXES
+            and "__pycache__" not in file.parts and file.is_file() and name not in NOT_MEASURED}
+
+
+@functools.lru_cache(maxsize=None)
+def _sources_at(commit: str, path: str) -> dict[str, bytes] | None:
+    """The same files as git holds them at a commit (None when git or the commit is missing);
+    cached, as a commit never changes and the docs ask for the same pair once per record."""
+    listed = _git("ls-tree", "-r", "--name-only", commit, "--", path.rstrip("/"))
+    if not listed:
+        return None
+    names = [name for name in listed.splitlines()
+             if name == path or (path.endswith("/") and Path(name).suffix in CODE_SUFFIXES and name not in NOT_MEASURED)]
+    sources = {}
+    for name in names:
+        shown_file = subprocess.run(["git", "show", f"{commit}:{name}"], cwd=ROOT, capture_output=True)
+        if shown_file.returncode != 0:
+            return None
+        sources[name] = shown_file.stdout
+    return sources
+
+
+def _digest(path: str, sources: dict[str, bytes]) -> str:
+    """A file's sha256, or for a folder one sha256 over its files' names and bytes, sorted."""
+    if not path.endswith("/") and list(sources) == [path]:
+        return hashlib.sha256(sources[path]).hexdigest()
     digest = hashlib.sha256()
-    for file in sorted(target.rglob("*")):
-        name = file.relative_to(ROOT).as_posix()
-        if file.suffix in CODE_SUFFIXES and "__pycache__" not in file.parts and file.is_file() and name not in NOT_MEASURED:
-            digest.update(name.encode() + b"\0" + file.read_bytes() + b"\0")
+    for name in sorted(sources, key=lambda name: Path(name).parts):  # the order rglob sorts in
+        digest.update(name.encode() + b"\0" + sources[name] + b"\0")
     return digest.hexdigest()
 
 
+def code_sha256(path: str) -> str:
+    """Hash of the source a path names, so a record can tell whether the code it measured changed."""
+    return _digest(path, _sources_now(path))
+
+
+@functools.lru_cache(maxsize=4096)
+def _meaning(name: str, source: bytes):
+    """What a source file does, without its comments and docstrings: a comment or a docstring
+    edited after a measurement (a renamed test path, a clearer sentence) changes no number."""
+    if name.endswith(".py"):
+        try:
+            tree = ast.parse(source)
+        except SyntaxError:
+            return source
+        for node in ast.walk(tree):
+            body = getattr(node, "body", None)
+            if isinstance(body, list) and body and isinstance(body[0], ast.Expr) \
+                    and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str):
+                node.body = body[1:] or [ast.Pass()]
+        return ast.dump(tree)
+    try:
+        return json.dumps(yaml.safe_load(source), sort_keys=True, default=str)
+    except yaml.YAMLError:
+        return source
+
+
 def changed_code(record: dict) -> list[str]:
-    """The measured paths whose source differs from what the record measured (empty: current)."""
-    return [path for path, sha in record["measured_code"].items()
-            if not (ROOT / path).exists() or code_sha256(path) != sha]
+    """The measured paths whose code differs from what the record measured (empty: current).
+    Bytes equal: current. Otherwise git's copy at the record's commit, when its hash is the one
+    recorded (so it is what was measured), is compared without comments and docstrings."""
+    changed = []
+    for path, sha in record["measured_code"].items():
+        if not (ROOT / path).exists():
+            changed.append(path)
+            continue
+        now = _sources_now(path)
+        if _digest(path, now) == sha:
+            continue
+        then = _sources_at(record["commit"], path) if record["commit"] else None
+        if then is None or _digest(path, then) != sha or set(then) != set(now) \
+                or any(_meaning(name, then[name]) != _meaning(name, now[name]) for name in now):
+            changed.append(path)
+    return changed
 
 
 def _git(*args) -> str:

@@ -21,7 +21,7 @@ Only what holds for every sensor is a rule; anything signed or unknown is left a
   magnitude (LENGTH_MAGNITUDES, FORCE_MAGNITUDES, FORCE_MAGNITUDE_STEMS).
 Ranges are in the column's own unit (hence per suffix, not per quantity: -273.15 is degrees
 Celsius). The scenes' column names (data/scenes/*.py) are checked against these rules by
-tests/test_training_input.py, so simulated data is never refused.
+tests/data/test_training_input.py, so simulated data is never refused.
 """
 import math
 import re

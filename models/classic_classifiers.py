@@ -6,7 +6,7 @@ features (data/datamodules/regression.py).
 Probabilities are calibrated by temperature scaling (Guo et al., "On calibration of modern
 neural networks", ICML 2017): p = softmax(beta * log(p_raw + EPS)), beta fitted on held-out
 calibration rows by maximum likelihood (the method scikit-learn's CalibratedClassifierCV calls
-"temperature"; tests/test_table_classification.py checks the two agree). One number, so a few
+"temperature"; tests/runs/test_table_classification.py checks the two agree). One number, so a few
 dozen rows fit it without overfitting, and it keeps every row's most probable class: the
 classification report and confusion matrix are the classifier's own. The exported graph
 (export/sklearn_graphs.py) applies the same three steps after the scikit-learn piece.

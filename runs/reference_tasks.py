@@ -1,7 +1,7 @@
 """Generated time-series classification tasks whose optimal accuracy is known (1.00), and the
 networks fitted on them exactly as `python train.py model=<name> trainer=<trainer>` builds them:
 do the nets reach the optimum with the reference recipe? (bench/tsc_reference.py prints the
-table; tests/test_reference_trainer.py asserts it on small budgets.) The tasks are described in
+table; tests/runs/test_reference_tasks.py asserts it on small budgets.) The tasks are described in
 bench/tsc_reference.py."""
 import time
 from pathlib import Path

@@ -1,4 +1,4 @@
-"""A PostgreSQL server for one test or measurement of a shared search (tests/test_shared_search.py,
+"""A PostgreSQL server for one test or measurement of a shared search (tests/runs/test_shared_search.py,
 bench/search_scaling.py): a fresh cluster in a temporary folder, reachable only through a Unix
 socket there (no TCP port, nothing outside touched), removed when the `with` block ends.
 

@@ -13,8 +13,8 @@ apply_threads(resolve_threads(os.environ.get("TOUCHSTONE_THREADS", "1")))
 
 # Hypothesis profiles. "ci" (the default) is derandomised with no example database, so a failure
 # reproduces exactly and prints its falsifying example; its per-test example counts add up to
-# more than 10,000 generated examples (tests/test_properties.py). "thorough" runs 20x more,
-# random: pytest --hypothesis-profile=thorough tests/test_properties.py
+# more than 10,000 generated examples (tests/models/test_numerical_properties.py). "thorough" runs 20x more,
+# random: pytest --hypothesis-profile=thorough tests/models/test_numerical_properties.py
 settings.register_profile("ci", derandomize=True, database=None, deadline=None, print_blob=True,
                           suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
 settings.register_profile("thorough", max_examples=2000, deadline=None, print_blob=True,

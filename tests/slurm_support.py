@@ -1,4 +1,4 @@
-"""A one-node SLURM cluster for one test (tests/test_shared_search.py): Debian's slurm-wlm daemons
+"""A one-node SLURM cluster for one test (tests/runs/test_shared_search.py): Debian's slurm-wlm daemons
 (slurmctld, slurmd) and a private munge daemon, all in a temporary folder with their own socket and
 ports, stopped by their process ids when the `with` block ends. Needs root (slurmd starts jobs as
 their user), as in CI; `SLURM_CONF` in the yielded environment points sbatch, squeue and submitit

@@ -34,7 +34,7 @@ are computed once per Poisson ratio and base in dimensionless form (trapezoid ru
 by e^-40), tabulated on r/h in [0, 12] and interpolated; beyond 12 h they are taken as zero (the
 share of the load carried there is under 0.5 %, see tests). The same machinery with the base
 moved to infinity reproduces Boussinesq's and Cerruti's stresses at depth h (the test of the
-transform and its signs, tests/test_scene_taxels.py).
+transform and its signs, tests/data/scenes/test_taxels.py).
 """
 from functools import lru_cache
 

@@ -7,7 +7,7 @@ tension-positive; tensor shear components (eps_xz = gamma_xz / 2) are returned a
 engineering shears.
 
 Sources (displacements differentiated here by hand; checked against equilibrium, the
-traction-free surface and the resultant force in tests/test_elastic_half_space.py):
+traction-free surface and the resultant force in tests/data/physics/test_elastic_half_space.py):
 - Boussinesq (normal force P pressing into the solid): Johnson, *Contact Mechanics* (1985)
   eq. 3.19; Timoshenko & Goodier, *Theory of Elasticity* (1970) sec. 138:
       u_x = P/(4 pi G) [x z / R^3 - (1 - 2 nu) x / (R (R + z))]

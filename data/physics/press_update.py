@@ -222,7 +222,7 @@ class NearFarSolver:
     (the adjoint sensitivity, Geselowitz; Holder 2005 ch. 1; as in the ERT skin's Jacobian,
     data/ert/jacobian.py). The error is second order in the far-field
     change plus the near field's effect on the far field's sensitivity; it is measured against
-    the full sparse solve in tests/test_scene_contract.py (under 1 % of a press's signal at 0.01).
+    the full sparse solve in tests/data/scenes/test_contract.py (under 1 % of a press's signal at 0.01).
     """
 
     def __init__(self, patch: PatchUpdateSolver, near_tolerance: float = 0.01):

@@ -47,7 +47,7 @@ PAPER = {"initial_slope_per_n": 0.0696, "saturated_fraction": 0.099, "early_phas
          "hysteresis_fraction": 0.083, "hysteresis_sd_fraction": 0.047}
 FREQUENCIES_HZ = (1.0, 3.75, 6.5, 9.25, 12.0)
 CYCLE_PEAK_N = 15.0
-# Results of fit_crossing_shape() and fit_relaxation_strength() (tests/test_scene_ert_physics.py re-fits them).
+# Results of fit_crossing_shape() and fit_relaxation_strength() (tests/data/scenes/test_ert_physics.py re-fits them).
 CONTACT = {"initial_slope_per_n": 0.0696, "saturated_fraction": 0.099, "crossing_shape": 2.1008}
 FOAM = {"relaxation_strength": 0.2015, "relaxation_time_s": 1.0 / (2.0 * np.pi * np.sqrt(12.0))}
 

@@ -5,7 +5,7 @@ One function per observation in ../shared/notes/seed-observations.md, registered
 A check gets a `SceneProbe` (the scene's composed parameters and helpers to simulate presses)
 and returns a `Measured`: the scene's value in words, whether it holds (None = not measured by
 this table, with the reason), the tolerance it was judged by, and the raw numbers the tests
-assert with margin. bench/fidelity.py prints the table; tests/test_fidelity.py asserts every
+assert with margin. bench/fidelity.py prints the table; tests/runs/fidelity/test_rubber12.py asserts every
 row that holds. Fingertip (seed 003) rows go in `CHECKS["fingertip"]` the same way.
 
 "Holds" follows the notes file's rule: the same measurement on simulated data agrees in
