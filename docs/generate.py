@@ -2,6 +2,7 @@
 
     .venv/bin/python docs/generate.py           # rewrite the blocks (make docs)
     .venv/bin/python docs/generate.py --check   # exit 1 naming each block that differs (make docs-check)
+    .venv/bin/python docs/generate.py docs/fidelity.md   # only the pages named
 
 A block is two markers with the renderer's output between them; the name says which table of
 docs/tables.py draws it:
@@ -107,9 +108,15 @@ def render_page(page: Path) -> str:
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--check", action="store_true", help="change nothing; exit 1 if a block differs")
+    parser.add_argument("pages", nargs="*", type=Path, help="only these pages (default: README.md and docs/*.md)")
     args = parser.parse_args(argv)
+    chosen = [page.resolve() for page in args.pages] or PAGES
+    unknown = [str(page) for page in chosen if page not in PAGES]
+    if unknown:
+        print(f"docs/generate.py: not a page with generated blocks: {', '.join(unknown)}", file=sys.stderr)
+        return 2
     try:
-        rendered = {page: render_page(page) for page in PAGES}
+        rendered = {page: render_page(page) for page in chosen}
     except (RecordError, PageError) as error:
         print(f"docs/generate.py: {error}", file=sys.stderr)
         return 2
