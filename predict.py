@@ -13,38 +13,60 @@ the step the window starts at, the predicted class and its probabilities. CSV or
 Bad input (a file, a value that is not finite in the model's dtype, a sample rate that is not the
 model's, an output that is the input or cannot be written, a malformed model) is one line on
 stderr, exit code 2, and no output file.
+
+A live stream (input=- for standard input, a serial device such as /dev/ttyACM0, or
+tcp://:PORT listening on localhost; docs/live.md) is predicted line by line as it arrives, one
+output line per prediction, flushed (export/live/). Heavy imports wait until they are needed, so
+--help answers in a second or two.
 """
 import os
 import sys
 import textwrap
 from pathlib import Path
 
-import numpy as np
-
-from common.atomic import atomic_write
 from common.errors import InputError
-from data.readers.recording_reader import median_step_rate, npz_recordings, read_npz, table_recordings
-from data.readers.table_reader import check_columns_exist, check_numeric_columns, read_table_file, where
-from data.units import UNITS, unit_of
-from export.onnx_predictor import OnnxPredictor, Recording
+
+# numpy, pandas, onnxruntime and the readers are imported where used: `--help` needs none of them.
 
 # key: (default, what it is); None: required.
 ARGUMENTS = {
     "model": (None, "the exported model, a run's model.onnx"),
     "input": (None, "CSV or Parquet (row models: one row per press; recording models: one row per time step), "
                     "or NPZ (recording models: X (n, channels, length), optional channel_names and sample_rate_hz, "
-                    "as training reads it)"),
-    "output": (None, "the predictions, CSV or Parquet by its suffix; written whole or not at all"),
+                    "as training reads it); or a live stream: - (standard input), a serial device (/dev/ttyACM0, "
+                    "serial:///dev/ttyUSB0) or tcp://:PORT (listens on localhost), one line per reading: "
+                    "[time_s,]channel values (docs/live.md)"),
+    "output": ("- (standard output) for a stream; required for a file",
+               "the predictions, CSV or Parquet by its suffix; written whole or not at all. A stream's: CSV or "
+               "JSON lines (.jsonl), one line per prediction, flushed"),
     "threads": ("TOUCHSTONE_THREADS, else onnxruntime's default", "onnxruntime's intra-op threads; 0: one per core"),
     "recording_column": ("recording", "a table's recording id column, used when the file has it: each recording "
                                       "is cut into windows on its own and every output row carries its id "
                                       "(row models: the column is copied to the output)"),
     "time_column": ("time_s", "a long table's time in seconds, used when the file has it: rows in time order "
                               "within a recording, and its rate must be the model's"),
+    "format": ("by output's suffix, else csv", "a stream's output: csv or jsonl"),
+    "backlog": ("batch", "a stream arriving faster than the model: batch (predict the lines waiting together, "
+                         "none lost), wait (one at a time; the rest wait in the input) or drop (only the newest)"),
+    "batch": ("256", "backlog=batch: most lines in one model call"),
+    "on_bad_line": ("skip", "a stream's malformed line: skip (reported on stderr with its line number) or stop "
+                            "(exit 2)"),
+    "hop": ("the model's window", "a recordings model on a stream: steps between predictions of its sliding window"),
+    "rows": ("none", "with cols=: the stream is a contact grid's frames (rows x cols cells, row-major); the "
+                     "contact tracker runs per frame, force from model= (the 3x3 window force model)"),
+    "cols": ("none", "the contact grid's columns"),
+    "pitch_mm": ("10", "the contact grid's cell pitch"),
+    "n_rest_frames": ("60", "the tracker's baseline: the first frames, without contact"),
+    "baud": ("115200", "a serial port's rate"),
+    "summary": ("none", "a stream's end-of-stream summary also as JSON in this file"),
+    "plot_file": ("none", "with a stream: the live view saved as PNG when the stream ends (works without a screen)"),
 }
 HELP = ("--help", "-h")
+PLOT = "--plot"  # a stream drawn live (matplotlib) for a person at the rig
 EXAMPLES = ["python predict.py model=outputs/<run>/model.onnx input=outputs/<run>/predictions.csv output=pred.csv",
             "python predict.py model=outputs/<run>/model.onnx input=rig.npz output=classes.csv",
+            "cat /dev/ttyACM0 | python predict.py model=outputs/<run>/model.onnx input=- --plot",
+            "python predict.py model=outputs/<run>/model.onnx input=/dev/ttyUSB0 baud=230400 output=live.csv",
             "python predict.py --help model=outputs/<run>/model.onnx"]
 RATE_TOLERANCE = 0.01  # relative: time stamps rounded in a CSV still give the model's rate
 
@@ -55,6 +77,9 @@ def parse(argv) -> tuple[dict, bool]:
     for item in argv:
         if item in HELP:
             wants_help = True
+            continue
+        if item == PLOT:
+            args[PLOT] = "yes"
             continue
         key, sep, value = item.partition("=")
         if not sep or key not in ARGUMENTS:
@@ -68,21 +93,25 @@ def parse(argv) -> tuple[dict, bool]:
 
 
 def usage() -> str:
-    lines = ["usage: python predict.py model=MODEL.onnx input=FILE output=FILE [key=value ...]", "",
+    lines = ["usage: python predict.py model=MODEL.onnx input=FILE output=FILE [key=value ...]",
+             "       python predict.py model=MODEL.onnx input=-|DEVICE|tcp://:PORT [output=FILE] [--plot] [key=value ...]",
+             "",
              "Predict with a model Touchstone exported, no training code needed.", ""]
     for key, (default, what) in ARGUMENTS.items():
         text = what + ("" if default is None else f" (default: {default})")
         lines.append(textwrap.fill(text, width=100, initial_indent=f"  {key + '=':<19}", subsequent_indent=" " * 21))
+    lines.append(f"  {PLOT:<19}a stream drawn live (matplotlib: readings above, predictions below)")
     lines += ["", "Examples:"] + [f"  {example}" for example in EXAMPLES]
     return "\n".join(lines)
 
 
 def _with_unit(column: str) -> str:
+    from data.units import UNITS, unit_of
     unit = unit_of(column)
     return f"{column} ({UNITS[unit].quantity}, {unit})" if unit in UNITS else column
 
 
-def model_inputs(predictor: OnnxPredictor) -> str:
+def model_inputs(predictor) -> str:
     """What `predictor` expects and writes, from its metadata."""
     what = predictor.metadata.get("model", "model")
     lines = [f"{predictor.path}: {predictor.kind} ({what}), Touchstone {predictor.metadata.get('touchstone_version', '?')}",
@@ -134,7 +163,7 @@ def same_file(a: Path, b: Path) -> bool:
         raise InputError(f"cannot resolve {a} or {b} ({error})".splitlines()[0]) from None
 
 
-def check_sample_rate(predictor: OnnxPredictor, rate: float | None, source: str, said_by: str) -> None:
+def check_sample_rate(predictor, rate: float | None, source: str, said_by: str) -> None:
     """A recording at another rate than the model's windows would be classified as if it were at
     the model's: refused (either rate unknown: nothing to compare)."""
     model_rate = predictor.sample_rate_hz
@@ -143,8 +172,12 @@ def check_sample_rate(predictor: OnnxPredictor, rate: float | None, source: str,
                          f"resample the recordings to {model_rate:g} Hz")
 
 
-def npz_input(predictor: OnnxPredictor, path: str) -> list[Recording]:
+def npz_input(predictor, path: str) -> list:
     """An NPZ's recordings, channels put in the model's order by name; ids are X's indices."""
+    import numpy as np
+
+    from data.readers.recording_reader import npz_recordings, read_npz
+    from export.onnx_predictor import Recording
     arrays = read_npz(path, required=("X",))
     X, names, rate = npz_recordings(arrays, path)
     missing = [c for c in predictor.channels if c not in names]
@@ -157,10 +190,15 @@ def npz_input(predictor: OnnxPredictor, path: str) -> list[Recording]:
     return [Recording(k, X[k, order].astype(np.float64), lambda step: f"step {step}") for k in range(len(X))]
 
 
-def table_input(predictor: OnnxPredictor, frame, source: str, args: dict) -> tuple[list[Recording], str | None]:
+def table_input(predictor, frame, source: str, args: dict) -> tuple[list, str | None]:
     """A long table's recordings as training reads them (recording_reader.table_recordings): by
     id when the file has the recording column, in time order when it has the time column; each
     step keeps its file row for messages. Also the id column used (None: one unnamed recording)."""
+    import numpy as np
+
+    from data.readers.recording_reader import median_step_rate, table_recordings
+    from data.readers.table_reader import check_columns_exist, check_numeric_columns, where
+    from export.onnx_predictor import Recording
     frame = frame.reset_index(drop=True)  # row k is the file's data row k, for messages
     columns = {key: args.get(key, ARGUMENTS[key][0]) for key in ("recording_column", "time_column")}
     for key, column in columns.items():
@@ -185,8 +223,9 @@ def table_input(predictor: OnnxPredictor, frame, source: str, args: dict) -> tup
     return recordings, id_column
 
 
-def predict(predictor: OnnxPredictor, args: dict):
+def predict(predictor, args: dict):
     """The predictions for args['input'] and a note on what was left out (or '')."""
+    from data.readers.table_reader import read_table_file
     source = args["input"]
     if Path(source).suffix.lower() == ".npz":
         if not predictor.reads_windows:
@@ -211,6 +250,7 @@ def predict(predictor: OnnxPredictor, args: dict):
 
 
 def write(result, output: Path) -> None:
+    from common.atomic import atomic_write
     parquet = output.suffix.lower() in (".parquet", ".pq")
     try:
         atomic_write(output, lambda tmp: result.to_parquet(tmp, index=False) if parquet
@@ -226,6 +266,71 @@ def write(result, output: Path) -> None:
         raise InputError(f"output={output}: cannot {what} ({error.strerror or type(error).__name__})") from None
 
 
+def whole(args: dict, key: str, least: int = 1) -> int | None:
+    """A whole-number argument (None when not given), at least `least`."""
+    if key not in args:
+        return None
+    text = args[key]
+    if not (text.isascii() and text.isdigit() and int(text) >= least):
+        raise InputError(f"{key} must be a whole number >= {least}, got {text!r}")
+    return int(text)
+
+
+def stream(args: dict, threads: int | None) -> int:
+    """A live stream, line by line (export/live/): predictions on the output as they are made, the
+    summary on stderr at the end."""
+    from export.live.backlog import Backlog
+    from export.live.kinds import RowStream, TrackerStream, WindowStream
+    from export.live.loop import run_stream
+    from export.live.sources import open_source
+    from export.live.writer import FORMATS
+    from export.onnx_predictor import OnnxPredictor
+
+    output = args.get("output", "-")
+    if output != "-":
+        check_output(Path(output), args)
+    fmt = args.get("format", "jsonl" if output.endswith(".jsonl") else "csv")
+    if fmt not in FORMATS:
+        raise InputError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+    grid = [whole(args, "rows"), whole(args, "cols")]
+    if (grid[0] is None) != (grid[1] is None):
+        raise InputError("rows= and cols= go together: the contact grid's size")
+    backlog = Backlog(args.get("backlog", "batch"), whole(args, "batch") or 256, warn=_say)
+    # one intra-op thread unless told: a single line is too small to share, and the loop is one thread
+    predictor = OnnxPredictor(args["model"], threads=1 if threads is None else threads)
+    if grid[0] is not None:
+        try:
+            pitch_mm = float(args.get("pitch_mm", "10"))
+        except ValueError:
+            raise InputError(f"pitch_mm must be a number of millimetres, got {args['pitch_mm']!r}") from None
+        kind = TrackerStream(predictor, *grid, pitch_mm, whole(args, "n_rest_frames", least=10) or 60)
+    elif predictor.reads_windows:
+        kind = WindowStream(predictor, whole(args, "hop"))
+    else:
+        kind = RowStream(predictor)
+    plot = None
+    if PLOT in args or "plot_file" in args:
+        from export.live.plot import LivePlot
+        plot = LivePlot(kind.input_columns, kind.columns, f"{Path(args['model']).name}: {args['input']}",
+                        show=PLOT in args, file=args.get("plot_file"))
+    source = open_source(args["input"], whole(args, "baud") or 115200, announce=_say)
+    _say(f"reading {source.name}: one prediction per {'frame' if grid[0] else 'line'} "
+         f"({kind.unit} of {len(kind.input_columns)} values, optionally after time_s); Ctrl-C or the input's end stops")
+    summary = run_stream(source, kind, backlog, (output, fmt), args.get("on_bad_line", "skip"), warn=_say,
+                         plot=plot)
+    if plot is not None:
+        plot.finish()
+    _say(summary.text(kind.unit))
+    if "summary" in args:
+        from common.atomic import atomic_write_text
+        atomic_write_text(Path(args["summary"]), summary.json() + "\n")
+    return 0
+
+
+def _say(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
+
+
 def main(argv=None) -> int:
     try:
         args, wants_help = parse(sys.argv[1:] if argv is None else argv)
@@ -233,13 +338,20 @@ def main(argv=None) -> int:
         if wants_help:
             text = usage()
             if "model" in args:
+                from export.onnx_predictor import OnnxPredictor
                 text += "\n\nThis model:\n" + model_inputs(OnnxPredictor(args["model"], threads=threads))
             else:
                 text += "\n\nAdd model=<file> to --help to list what that model expects."
             print(text)
             return 0
+        from export.live.sources import is_stream
+        if is_stream(args["input"]):
+            return stream(args, threads)
+        if "output" not in args:
+            raise InputError("missing output=... (--help lists the arguments)")
         output = Path(args["output"])
         check_output(output, args)
+        from export.onnx_predictor import OnnxPredictor
         predictor = OnnxPredictor(args["model"], threads=threads)
         result, note = predict(predictor, args)
         write(result, output)

@@ -41,9 +41,17 @@ class Kind:
     default_input: str
     main_output: str
 
+    def columns(self, predictor) -> list[str]:
+        """The output columns of one prediction, in order (a table's and a stream's)."""
+        raise NotImplementedError
+
+    def arrays(self, predictor, out: dict) -> list[np.ndarray]:
+        """The graph's outputs for n inputs as one array of n values per output column."""
+        raise NotImplementedError
+
     def table(self, predictor, out: dict) -> pd.DataFrame:
         """One output row per input row of a table."""
-        raise NotImplementedError
+        return pd.DataFrame(dict(zip(self.columns(predictor), self.arrays(predictor, out))))
 
     def outputs(self, predictor, with_unit) -> list[str]:
         """What the model writes, for --help (`with_unit` names a column with its unit)."""
@@ -51,18 +59,21 @@ class Kind:
 
 
 class Regression(Kind):
-    def table(self, predictor, out):
-        """The targets, and their 95 % bounds when the model has them."""
+    def columns(self, predictor):
+        """The targets, then each target's 95 % bounds when the model has them."""
+        bounds = [f"{t}_{side}95" for t in predictor.targets for side in ("lower", "upper")]
+        return predictor.targets + (bounds if "interval_half_width" in predictor.outputs else [])
+
+    def arrays(self, predictor, out):
         targets = predictor.targets
         prediction = out["prediction"].astype(np.float64)  # bounds in float64: float32 sums could overflow
         # predictions and bounds within each target's physical range (data/units.py), as the run reports them
-        result = pd.DataFrame(clip_columns(prediction, targets), columns=targets)
+        arrays = list(clip_columns(prediction, targets).T)
         if "interval_half_width" in out:
             half = out["interval_half_width"].astype(np.float64)
             lower, upper = clip_columns(prediction - half, targets), clip_columns(prediction + half, targets)
-            for k, target in enumerate(targets):
-                result[f"{target}_lower95"], result[f"{target}_upper95"] = lower[:, k], upper[:, k]
-        return result
+            arrays += [bound[:, k] for k in range(len(targets)) for bound in (lower, upper)]
+        return arrays
 
     def outputs(self, predictor, with_unit):
         bounds = len(predictor.outputs) > 1
@@ -71,9 +82,13 @@ class Regression(Kind):
 
 
 class Classification(Kind):
-    def table(self, predictor, out):
+    def columns(self, predictor):
         """The predicted class and one probability column per class."""
-        return predictor._classes_frame(out["probabilities"])
+        return ["predicted"] + [f"p_{c}" for c in predictor.classes]
+
+    def arrays(self, predictor, out):
+        proba = out["probabilities"]
+        return [np.asarray(predictor.classes)[proba.argmax(axis=1)]] + list(proba.T)
 
     def outputs(self, predictor, with_unit):
         label = predictor.metadata.get("label")  # the target column a table classifier was trained on
@@ -221,10 +236,15 @@ class OnnxPredictor:
             raise InputError(f"{locate(index)} has {problem}")
         return cast
 
+    def run_graph(self, values: np.ndarray) -> list[np.ndarray]:
+        """The graph's raw outputs for values already in its input dtype and shape, unchecked: the
+        live loop (export/live/) checks each line itself and cannot afford a second pass."""
+        return self.session.run(None, {self.input_name: values})
+
     def _run(self, values: np.ndarray, locate) -> dict[str, np.ndarray]:
         """The graph's outputs by name, each (n, width) and finite; `locate(row)` names an input row."""
         try:
-            results = self.session.run(None, {self.input_name: values})
+            results = self.run_graph(values)
         except Exception as error:  # onnxruntime's own error types: a graph that cannot run this input
             message = str(error).strip().splitlines()[0][:200] if str(error).strip() else ""
             raise InputError(f"{self.path}: the model failed to run ({type(error).__name__}: {message})") from None
@@ -315,9 +335,7 @@ class OnnxPredictor:
         return result
 
     def _classes_frame(self, proba: np.ndarray) -> pd.DataFrame:
-        result = pd.DataFrame(proba, columns=[f"p_{c}" for c in self.classes])
-        result.insert(0, "predicted", np.asarray(self.classes)[proba.argmax(axis=1)])
-        return result
+        return self.reads.table(self, {"probabilities": proba})
 
 
 @dataclass(frozen=True)

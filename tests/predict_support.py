@@ -104,3 +104,34 @@ def save(model: onnx.ModelProto, path) -> Path:
     path = Path(path)
     path.write_bytes(model.SerializeToString())
     return path
+
+
+def force_model() -> onnx.ModelProto:
+    """The contact tracker's force model as export writes it for experiment=capacitive_force with
+    scene.characterisation_channels=window: the 3 x 3 window's loads [batch, 9] float64 ->
+    force_n [batch, 1] = 0.01 x their sum."""
+    from data.preprocessing.contact_windows import window_channel_names
+    channels = window_channel_names()
+    weights = helper.make_tensor("weights", TensorProto.FLOAT, [len(channels), 1],
+                                 np.full(len(channels), 0.01, dtype=np.float32))
+    nodes = [helper.make_node("Cast", ["channels"], ["single"], to=TensorProto.FLOAT),
+             helper.make_node("MatMul", ["single", "weights"], ["prediction"])]
+    graph = helper.make_graph(nodes, "tiny_force",
+                              [helper.make_tensor_value_info("channels", TensorProto.DOUBLE, ["batch", len(channels)])],
+                              [helper.make_tensor_value_info("prediction", TensorProto.FLOAT, ["batch", 1])],
+                              [weights])
+    metadata = {"kind": "regression", "input": "channels", "channels": json.dumps(channels),
+                "targets": json.dumps(["force_n"]), "outputs": json.dumps(["prediction"])}
+    return _model(graph, metadata)
+
+
+def contact_frames(n_rest: int = 20, n_press: int = 10, rows: int = 6, cols: int = 6, seed: int = 0) -> np.ndarray:
+    """A grid's frames [n, rows * cols]: rest frames (counts near 100), then one press moving
+    along the middle row (a bump of 80 counts), as a capacitive skin's firmware streams them."""
+    rng = np.random.default_rng(seed)
+    frames = 100 + rng.normal(0, 1, (n_rest + n_press, rows * cols))
+    y, x = np.mgrid[0:rows, 0:cols]
+    for k in range(n_press):
+        centre = 1 + (k % (cols - 2))
+        frames[n_rest + k] += (80 * np.exp(-((x - centre) ** 2 + (y - rows // 2) ** 2) / 1.0)).ravel()
+    return frames
