@@ -82,14 +82,16 @@ def test_shifted_sums_equal_an_explicit_convolution_with_the_84_kernels(n_channe
         assert ties[1:].mean() < 0.01          # ties are rare off the constant window
 
 
-def test_biases_own_outputs_and_inner_pooling_agree_with_the_whole_transform():
+@pytest.mark.parametrize("length, n_features", [(80, 2_000), (700, 10_000)])
+def test_biases_own_outputs_and_inner_pooling_agree_with_the_whole_transform(length, n_features):
     """A kernel's output on its own window (what its biases are quantiles of) is that row of the
     batched product; eager torch, comparing inner-pooled kernels on the inner part only, counts
-    what the graph's -inf padding counts."""
+    what the graph counts: with -inf padding (short windows, several dilations per step) or
+    comparing them on their inner part only, the kernels reordered and put back (long windows)."""
     rng = np.random.default_rng(3)
-    x = rng.standard_normal((7, 2, 80)).cumsum(-1).astype(np.float32)
+    x = rng.standard_normal((7, 2, length)).cumsum(-1).astype(np.float32)
     x[2, :, 30:] = 0.5                                            # a flat stretch: outputs tie biases
-    module = MiniRocket(2, 80, 2_000)
+    module = MiniRocket(2, length, n_features)
     module.fit_biases(x, np.random.default_rng(0), 4)
     with torch.no_grad():
         for group in module.groups:
@@ -274,3 +276,39 @@ def test_the_exported_graph_equals_the_eager_pipeline_and_survives_the_fitted_st
     onnx_proba = session.run(None, {"window": raw.astype(np.float32)})[0]
     np.testing.assert_allclose(onnx_proba, eager, atol=1e-4)
     assert (onnx_proba.argmax(1) == y).mean() == (eager.argmax(1) == y).mean()
+
+
+@pytest.mark.parametrize("length", [150, 700])
+def test_the_exported_minirocket_counts_what_eager_counts_and_long_windows_add_no_mask(length):
+    """The traced graph in onnxruntime gives eager torch's features: short windows through the
+    -inf mask, long ones (one dilation per comparison step) with inner-pooled kernels compared on
+    their inner steps only, so no -inf constant reaches their graph."""
+    import onnx
+    from export.torch_graphs import to_onnx
+
+    class Features(torch.nn.Module):
+        def __init__(self, minirocket):
+            super().__init__()
+            self.minirocket = minirocket
+
+        def forward(self, x):
+            return self.minirocket.transform(x)
+
+    rng = np.random.default_rng(length)
+    x = rng.standard_normal((5, 2, length)).cumsum(-1).astype(np.float32)
+    x[1, :, length // 2:] = 0.25                                       # a flat stretch
+    module = MiniRocket(2, length, 10_000)
+    module.fit_biases(x, np.random.default_rng(0), 4)
+    one_per_step = [g for g in module.groups if (1 << 18) // (84 * g.count * length) <= 1]
+    assert (len(one_per_step) == len(module.groups)) == (length > 500)     # both forms are tested
+    proto = to_onnx(Features(module), torch.from_numpy(x[:2]), "window", "features", 17)
+    session = ort.InferenceSession(proto.SerializeToString(), providers=["CPUExecutionProvider"])
+    with torch.no_grad():
+        eager = module.transform(torch.from_numpy(x)).numpy()
+    graph = session.run(None, {"window": x})[0]
+    assert np.mean(graph != eager) < 1e-3      # a flat stretch's ties may round either way (module docstring)
+    np.testing.assert_allclose(graph, eager, atol=0.02)
+    masks = [t for t in proto.graph.initializer if np.isneginf(onnx.numpy_helper.to_array(t)).any()]
+    masks += [n for n in proto.graph.node if n.op_type == "Constant" and any(
+        a.t.dims and np.isneginf(onnx.numpy_helper.to_array(a.t)).any() for a in n.attribute)]
+    assert bool(masks) == (len(one_per_step) < len(module.groups))    # only groups of several dilations per step
