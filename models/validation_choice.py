@@ -26,6 +26,21 @@ on these very validation rows, so its loss there is optimistic and would win eve
 GunPoint, seeds 0-2: PR-CNN and ResCNN both at validation accuracy 1.0, ResCNN taken on its lower
 loss, test accuracy 0.956 ± 0.037). The log loss is still reported.
 
+Cost (`prefer`, classes only): `cheapest_within_noise` keeps, among the candidates that are not
+significantly less accurate than the most accurate one (McNemar as above, against it), the cheapest
+to predict: walked in fit-cost order, a later one replaces the one kept only when its measured
+latency (`latency_ms_`: the median of a few single-row predict_proba calls, eager) is below
+1 / `latency_factor` of it (latencies drift by tens of percent between runs on a shared machine: a
+factor keeps the choice reproducible). `most_accurate` keeps the highest held-out accuracy (exact
+ties to the cheaper). Either way `trade_` (metrics.json `choice.trade`, the log and the reason
+TensorBoard shows) says what the choice gave up against the most accurate candidate (the
+accuracy difference with its 95 % paired interval) and what it saved (latency and fit time of each).
+With `skip_unwinnable` (true: every class task; or a list of tasks), a costlier classifier is not
+fitted when it could not change the choice:
+when the one kept is wrong on e rows, a candidate right on all of them reaches z = sqrt(e) at most,
+so with sqrt(e) <= significance_z none can be significantly more accurate (`most_accurate`: when
+e = 0); each is named in `skipped_` with that reason.
+
 What the candidates are scored on (`score_on`): `validation` (and `auto`, which a run may resolve to
 `training`), the validation rows given to `fit` (or carved from the training rows when none are); `training`, every candidate fitted on all the
 training rows and scored on its own held-out predictions of them (`out_of_fold_proba_`: the ROCKET
@@ -56,10 +71,14 @@ from data.splits.indices import carve_validation
 from models.capabilities import declare
 from models.epoch_callback import member_callback
 from models.estimator_base import TouchstoneEstimator
+from models.paired_accuracy import accuracy_difference, best_reachable_z, significantly_better
 
 log = logging.getLogger(__name__)
 TASKS = ("regression", "classification", "recordings")
 SCORE_ON = ("auto", "validation", "training")
+PREFER = ("cheapest_within_noise", "most_accurate")
+LATENCY_CALLS = 5          # single-row predict_proba calls per candidate (the median is kept)
+LATENCY_BUDGET_S = 0.5     # ... or fewer, once they took this long
 ENSEMBLE = "ensemble"
 
 
@@ -79,8 +98,12 @@ def _fit_kwargs(estimator, **kwargs) -> dict:
 
 class ValidationChoice(TouchstoneEstimator):
     def __init__(self, candidates=None, task="auto", budget_s=None, relative_cost=None, ensemble=True,
-                 val_fraction=0.15, significance_z=1.96, seed=0, score_on="auto"):
+                 val_fraction=0.15, significance_z=1.96, seed=0, score_on="auto", prefer="cheapest_within_noise",
+                 skip_unwinnable: bool | list = True, latency_factor=2.0):
         self.candidates = candidates
+        self.prefer = prefer
+        self.skip_unwinnable = skip_unwinnable
+        self.latency_factor = latency_factor
         self.score_on = score_on
         self.task = task
         self.significance_z = significance_z
@@ -122,6 +145,14 @@ class ValidationChoice(TouchstoneEstimator):
                 raise InputError(f"model.relative_cost.{name} must be a positive number, got {cost!r}")
         if not (isinstance(self.significance_z, (int, float)) and self.significance_z >= 0):
             raise InputError(f"model.significance_z must be a number >= 0, got {self.significance_z!r}")
+        if self.prefer not in PREFER:
+            raise InputError(f"model.prefer must be one of {', '.join(PREFER)}, got {self.prefer!r}")
+        if not (isinstance(self.skip_unwinnable, bool) or (isinstance(self.skip_unwinnable, (list, tuple))
+                                                          and set(self.skip_unwinnable) <= set(TASKS))):
+            raise InputError(f"model.skip_unwinnable must be true, false or a list of {', '.join(TASKS)}, "
+                             f"got {self.skip_unwinnable!r}")
+        if not (isinstance(self.latency_factor, (int, float)) and self.latency_factor >= 1):
+            raise InputError(f"model.latency_factor must be a number >= 1, got {self.latency_factor!r}")
         if self.score_on not in SCORE_ON:
             raise InputError(f"model.score_on must be one of {', '.join(SCORE_ON)}, got {self.score_on!r}")
 
@@ -180,19 +211,16 @@ class ValidationChoice(TouchstoneEstimator):
             self.majority_accuracy_ = float(np.unique(y_scored, return_counts=True)[1].max() / len(y_scored))
         costs = {name: float((self.relative_cost or {}).get(name, 1.0)) for name in candidates}
         order = sorted(candidates, key=lambda name: costs[name])   # stable: ties keep the listed order
-        self.models_, self.scores_, self.fit_time_s_, self.skipped_ = {}, {}, {}, {}
+        self.models_, self.scores_, self.fit_time_s_, self.skipped_, self.latency_ms_ = {}, {}, {}, {}, {}
         ranks, outputs, start, spent_per_cost = {}, {}, time.perf_counter(), []
+        self.unit_ = "recordings" if self.task_ == "recordings" else "rows"
         for name in order:
             elapsed = time.perf_counter() - start
-            if self.models_ and self.budget_s is not None:
-                estimate = costs[name] * float(np.mean(spent_per_cost))
-                if elapsed + estimate > self.budget_s:
-                    self.skipped_[name] = (f"estimated {estimate:.1f} s (relative cost {costs[name]:g} x "
-                                           f"{np.mean(spent_per_cost):.2f} s measured per unit) exceeds the "
-                                           f"{max(self.budget_s - elapsed, 0):.1f} s left of model.budget_s="
-                                           f"{self.budget_s:g}")
-                    log.info("model choice: %s skipped, %s", name, self.skipped_[name])
-                    continue
+            reason = self._why_not(name, costs[name], elapsed, spent_per_cost, outputs, y_scored)
+            if reason is not None:
+                self.skipped_[name] = reason
+                log.info("model choice: %s skipped, %s", name, reason)
+                continue
             began = time.perf_counter()
             model = clone(candidates[name]).fit(X, y, **_fit_kwargs(
                 candidates[name], X_val=X_val, y_val=y_val, groups=groups,
@@ -202,11 +230,16 @@ class ValidationChoice(TouchstoneEstimator):
             outputs[name] = self._held_out(name, model) if on_training else self._output(model, X_val)
             ranks[name], self.scores_[name] = self._score(y_scored, outputs[name])
             self.models_[name] = model
-            log.info("model choice: %s fitted in %.1f s, %s %s", name, self.fit_time_s_[name],
-                     "held-out" if on_training else "validation",
+            if self.task_ != "regression":
+                self.latency_ms_[name] = self._latency_ms(model, X_val if X_val is not None else X)
+            log.info("model choice: %s's own fit took %.1f s%s; %s %s", name, self.fit_time_s_[name],
+                     f", {self.latency_ms_[name]:.2f} ms per {self.unit_[:-1]} (eager, batch 1)"
+                     if name in self.latency_ms_ else "", "held-out" if on_training else "validation",
                      ", ".join(f"{k} {v:.4f}" for k, v in self.scores_[name].items()))
+        self.choosing_s_ = time.perf_counter() - start
+        self.ties_, self.trade_ = None, None
         best = (max(ranks, key=lambda name: ranks[name]) if self.task_ == "regression"   # max keeps the first (cheapest) of equals
-                else self._significantly_best(outputs, y_scored))
+                else self._preferred(outputs, y_scored))
         self.ensemble_weights_ = None
         if self.ensemble and len(self.models_) > 1:
             weights = self._ensemble_weights()
@@ -221,20 +254,81 @@ class ValidationChoice(TouchstoneEstimator):
         log.info("model choice: %s", self.reason_)
         return self
 
-    def _significantly_best(self, outputs, y_val) -> str:
-        """Walking the fitted classifiers cheapest first, the one kept: a costlier one takes over
-        only when McNemar's z against the one kept so far exceeds significance_z."""
-        right = {name: self.classes_[proba.argmax(axis=1)] == np.asarray(y_val) for name, proba in outputs.items()}
-        kept = None
-        for name in right:                          # fitted in cost order
-            if kept is None:
-                kept = name
-                continue
-            gains = int(np.sum(right[name] & ~right[kept]))
-            losses = int(np.sum(~right[name] & right[kept]))
-            if gains > losses and (gains - losses) / np.sqrt(gains + losses) > self.significance_z:
-                kept = name
+    def _why_not(self, name, cost, elapsed, spent_per_cost, outputs, y_scored) -> str | None:
+        """Why candidate `name` is not fitted (None: it is): it does not fit in the budget, or,
+        for classes with skip_unwinnable, no candidate could change the choice any more."""
+        if not self.models_:
+            return None                                   # the cheapest always runs
+        if self._skips_unwinnable():
+            kept = self._preferred(outputs, y_scored, quiet=True)
+            errors = int(np.sum(self.classes_[outputs[kept].argmax(axis=1)] != np.asarray(y_scored)))
+            reachable = best_reachable_z(errors)
+            if self.prefer == "most_accurate" and errors == 0:
+                return f"{kept} is right on every held-out {self.unit_[:-1]}: no candidate can be more accurate"
+            if self.prefer == "cheapest_within_noise" and reachable <= self.significance_z:
+                return (f"{kept} is wrong on {errors} of {len(y_scored)} scored {self.unit_}: a candidate right on "
+                        f"all of them would reach McNemar z = {reachable:.2f} <= {self.significance_z:g}, so none "
+                        "can be significantly more accurate (model.prefer=most_accurate or "
+                        "model.skip_unwinnable=false fits it anyway)")
+        if self.budget_s is not None:
+            estimate = cost * float(np.mean(spent_per_cost))
+            if elapsed + estimate > self.budget_s:
+                return (f"estimated {estimate:.1f} s (relative cost {cost:g} x {np.mean(spent_per_cost):.2f} s "
+                        f"measured per unit) exceeds the {max(self.budget_s - elapsed, 0):.1f} s left of "
+                        f"model.budget_s={self.budget_s:g}")
+        return None
+
+    def _skips_unwinnable(self) -> bool:
+        """skip_unwinnable: true (every class task), false, or the tasks it applies to."""
+        tasks = self.skip_unwinnable if isinstance(self.skip_unwinnable, (list, tuple)) else (
+            ("classification", "recordings") if self.skip_unwinnable else ())
+        return self.task_ != "regression" and self.task_ in tasks
+
+    @staticmethod
+    def _latency_ms(model, X) -> float:
+        """Median milliseconds of a single-row predict_proba (eager), over a few calls."""
+        row, times = X[:1], []
+        began = time.perf_counter()
+        while len(times) < LATENCY_CALLS and (not times or time.perf_counter() - began < LATENCY_BUDGET_S):
+            call = time.perf_counter()
+            model.predict_proba(row)
+            times.append(time.perf_counter() - call)
+        return 1e3 * float(np.median(times))
+
+    def _right(self, outputs, y_val) -> dict:
+        return {name: self.classes_[proba.argmax(axis=1)] == np.asarray(y_val) for name, proba in outputs.items()}
+
+    def _preferred(self, outputs, y_val, quiet=False) -> str:
+        """The classifier kept among those fitted (in cost order) by `prefer` (the module docstring);
+        unless `quiet`, the ties and the trade are noted (ties_, trade_)."""
+        right = self._right(outputs, y_val)
+        accuracy = {name: float(r.mean()) for name, r in right.items()}
+        top = max(right, key=lambda name: accuracy[name])   # max keeps the first (cheapest to fit) of equals
+        tied = [name for name in right if accuracy[name] == accuracy[top]]
+        if self.prefer == "most_accurate":
+            kept, rule = top, "the cheapest to fit"
+        else:
+            within = [name for name in right if not significantly_better(right[top], right[name], self.significance_z)]
+            kept = within[0]
+            for name in within[1:]:
+                if self.latency_ms_[name] * self.latency_factor < self.latency_ms_[kept]:
+                    kept = name
+            rule = f"the cheapest to predict within noise (latency below 1/{self.latency_factor:g} of the next)"
+        if not quiet:
+            if len(tied) > 1:
+                self.ties_ = (f"{', '.join(tied)} tie at held-out accuracy {accuracy[top]:.4f}; "
+                              f"broken by cost: {rule}")
+                log.info("model choice: %s", self.ties_)
+            self.trade_ = self._trade(kept, top, right)
         return kept
+
+    def _trade(self, kept, top, right) -> dict:
+        """What keeping `kept` gave up against the most accurate `top` and what it saved."""
+        trade = {"prefer": self.prefer, "kept": kept, "most_accurate": top,
+                 "accuracy_given_up": accuracy_difference(right[top], right[kept]),
+                 "latency_ms": dict(self.latency_ms_), "fit_time_s": dict(self.fit_time_s_)}
+        trade["latency_saved_ms"] = self.latency_ms_[top] - self.latency_ms_[kept]
+        return trade
 
     def _ensemble_weights(self) -> dict | None:
         """Weights of the validation-weighted mixture: the candidates' validation score above
@@ -256,16 +350,24 @@ class ValidationChoice(TouchstoneEstimator):
         if self.score_on == "training":
             how = "; ".join(f"{n} {m}" for n, m in self.scored_on_["by"].items())
             rows = "held-out training"
-            text = (f"chose {self.chosen_} on held-out {metric} over all {self.scored_on_['n']} training rows, "
-                    f"each predicted by a fit without it ({how}), trained on all of them ({shown})")
+            text = (f"chose {self.chosen_} on held-out {metric} over all {self.scored_on_['n']} training "
+                    f"{self.unit_}, each predicted by a fit without it ({how}), trained on all of them ({shown})")
         else:
-            text = f"chose {self.chosen_} on validation {metric} over {self.scored_on_['n']} rows ({shown})"
-        top = max((n for n in self.models_), key=lambda n: self.scores_[n][key])
-        if self.task_ != "regression" and self.scores_[top][key] > self.scores_[self.chosen_][key]:
-            text += (f"; {top} is right on more {rows} rows but not significantly more "
-                     f"(McNemar z <= {self.significance_z:g}), so the cheaper one stays")
+            text = f"chose {self.chosen_} on validation {metric} over {self.scored_on_['n']} {self.unit_} ({shown})"
+        if self.ties_:
+            text += f"; {self.ties_}"
+        trade = self.trade_ if self.chosen_ != ENSEMBLE else None
+        if trade is not None and trade["kept"] != trade["most_accurate"]:
+            top, given = trade["most_accurate"], trade["accuracy_given_up"]
+            low, high = given["interval95"]
+            text += (f"; {top} is right on more {rows} {self.unit_} but not significantly more (McNemar z "
+                     f"{given['z']:.2f} <= {self.significance_z:g}), so the cheaper one stays (model.prefer="
+                     f"{self.prefer}): gave up {given['difference']:.4f} accuracy (95 % interval {low:.4f} to "
+                     f"{high:.4f}), saved {trade['latency_saved_ms']:.2f} ms per {self.unit_[:-1]} "
+                     f"({self.latency_ms_[self.chosen_]:.2f} against {self.latency_ms_[top]:.2f} ms, eager batch 1; "
+                     f"fits {self.fit_time_s_[self.chosen_]:.1f} s against {self.fit_time_s_[top]:.1f} s)")
         if self.skipped_:
-            text += f"; skipped for the budget: {', '.join(self.skipped_)}"
+            text += "; not fitted: " + "; ".join(f"{n} ({why})" for n, why in self.skipped_.items())
         return text
 
     @property
@@ -292,4 +394,5 @@ class ValidationChoice(TouchstoneEstimator):
         check_is_fitted(self, "chosen_")
         return {"task": self.task_, "chosen": self.chosen_, "reason": self.reason_, "budget_s": self.budget_s,
                 "scored_on": self.scored_on_, "validation": self.scores_, "fit_time_s": self.fit_time_s_, "skipped": self.skipped_,
-                "ensemble_weights": self.ensemble_weights_}
+                "ensemble_weights": self.ensemble_weights_, "prefer": self.prefer, "latency_ms": self.latency_ms_,
+                "ties": self.ties_, "trade": self.trade_, "choosing_s": self.choosing_s_}

@@ -140,7 +140,7 @@ def test_a_costlier_classifier_must_be_right_on_significantly_more_validation_ro
     X_val = np.column_stack([signs, signs])             # both features carry the label ...
     X_val[:first_wrong, 0] *= -1                        # ... the cheap one's misses a few rows
     choice = ValidationChoice({"cheap": OneFeature(0), "costly": OneFeature(1)}, ensemble=False,
-                              relative_cost={"cheap": 1, "costly": 10})
+                              relative_cost={"cheap": 1, "costly": 10}, skip_unwinnable=False)
     choice.fit(X, (X[:, 0] > 0).astype(int), X_val, y_val)
     assert choice.scores_["costly"]["accuracy"] == 1.0 > choice.scores_["cheap"]["accuracy"]
     assert choice.chosen_ == chosen
@@ -213,3 +213,94 @@ def test_the_rocket_familys_held_out_predictions_are_exact_leave_one_out():
         np.testing.assert_allclose(model.out_of_fold_proba_[i], expected, rtol=1e-6, atol=1e-9)
     grouped = RocketClassifier(n_features=840).fit(X, y, groups=np.arange(30) // 2)
     assert grouped.out_of_fold_method_ == "3 stratified folds" and grouped.out_of_fold_proba_.shape == (30, 3)
+
+
+class SlowToPredict(OneFeature):
+    """OneFeature that takes `sleep_s` per predict_proba call."""
+    def __init__(self, feature=0, sleep_s=0.0):
+        super().__init__(feature)
+        self.sleep_s = sleep_s
+
+    def predict_proba(self, X):
+        time.sleep(self.sleep_s)
+        return super().predict_proba(X)
+
+
+def labelled_by_both(n_val, cheap_wrong, costly_wrong=0):
+    """Training rows, and validation rows that feature 0 (the cheap one's) gets wrong on its
+    first `cheap_wrong` rows and feature 1 on the `costly_wrong` rows after those."""
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((100, 2))
+    y_val = rng.integers(0, 2, n_val)
+    signs = np.where(y_val == 1, 1.0, -1.0)
+    X_val = np.column_stack([signs, signs])
+    X_val[:cheap_wrong, 0] *= -1
+    X_val[cheap_wrong:cheap_wrong + costly_wrong, 1] *= -1
+    return X, (X[:, 0] > 0).astype(int), X_val, y_val
+
+
+@pytest.mark.parametrize("prefer, chosen", [("cheapest_within_noise", "fast"), ("most_accurate", "slow")])
+def test_within_noise_the_cheapest_to_predict_is_kept_and_the_trade_is_said(prefer, chosen):
+    """"slow" (costlier to fit and 20 ms per call) is right on 3 more rows of 40 (z 1.7): within noise,
+    so cheapest_within_noise keeps "fast" and says what it gave up (3/40, with its paired interval)
+    and saved; most_accurate keeps "slow"."""
+    X, y, X_val, y_val = labelled_by_both(40, 3)
+    choice = ValidationChoice({"fast": SlowToPredict(0), "slow": SlowToPredict(1, sleep_s=0.02)}, ensemble=False,
+                              relative_cost={"fast": 1, "slow": 10}, prefer=prefer, skip_unwinnable=False)
+    choice.fit(X, y, X_val, y_val)
+    assert choice.chosen_ == chosen
+    trade = choice.report()["trade"]
+    assert trade["kept"] == chosen and trade["most_accurate"] == "slow" and trade["prefer"] == prefer
+    assert choice.latency_ms_["slow"] > 15 > choice.latency_ms_["fast"]
+    given = trade["accuracy_given_up"]
+    if chosen == "fast":
+        assert given["difference"] == pytest.approx(3 / 40) and given["gains"] == 3 and given["losses"] == 0
+        low, high = given["interval95"]
+        assert low < 0 < 3 / 40 < high      # not significant: the interval holds 0
+        assert trade["latency_saved_ms"] > 15
+        assert "gave up 0.0750 accuracy (95 % interval" in choice.reason_ and "model.prefer=cheapest" in choice.reason_
+    else:
+        assert given["difference"] == 0 and trade["latency_saved_ms"] == 0
+
+
+def test_a_costlier_candidate_faster_to_predict_is_kept_within_noise_only_by_a_clear_margin():
+    X, y, X_val, y_val = labelled_by_both(40, 1, 1)
+    for slow_s, chosen in ((0.02, "quick_to_predict"), (0.0, "first")):
+        choice = ValidationChoice({"first": SlowToPredict(0, sleep_s=slow_s), "quick_to_predict": SlowToPredict(1)},
+                                  ensemble=False, relative_cost={"first": 1, "quick_to_predict": 10},
+                                  skip_unwinnable=False)
+        choice.fit(X, y, X_val, y_val)
+        assert choice.chosen_ == chosen      # equal latencies (both ~0): the first to fit stays
+
+
+def test_candidates_that_cannot_win_are_not_fitted_and_named_with_the_reason():
+    """The cheap one is wrong on 3 of 40: a candidate right on all three reaches z = sqrt(3) = 1.73,
+    never significant, so the costly one is skipped; on 10 of 40 it is fitted and wins; with
+    most_accurate it is fitted unless the cheap one is never wrong."""
+    X, y, X_val, y_val = labelled_by_both(40, 3)
+    candidates = {"cheap": OneFeature(0), "costly": OneFeature(1)}
+    choice = ValidationChoice(candidates, ensemble=False, relative_cost={"cheap": 1, "costly": 10}).fit(
+        X, y, X_val, y_val)
+    assert choice.chosen_ == "cheap" and list(choice.models_) == ["cheap"]
+    assert "wrong on 3 of 40 scored rows" in choice.skipped_["costly"] and "z = 1.73 <= 1.96" in choice.skipped_["costly"]
+    assert "not fitted: costly (cheap is wrong on 3" in choice.reason_
+    assert ValidationChoice(candidates, ensemble=False, relative_cost={"cheap": 1, "costly": 10},
+                            prefer="most_accurate").fit(X, y, X_val, y_val).chosen_ == "costly"
+    X, y, X_val, y_val = labelled_by_both(40, 10)
+    assert ValidationChoice(candidates, ensemble=False, relative_cost={"cheap": 1, "costly": 10}).fit(
+        X, y, X_val, y_val).chosen_ == "costly"
+    X, y, X_val, y_val = labelled_by_both(40, 0)
+    most = ValidationChoice(candidates, ensemble=False, relative_cost={"cheap": 1, "costly": 10},
+                            prefer="most_accurate").fit(X, y, X_val, y_val)
+    assert "right on every held-out row" in most.skipped_["costly"]
+
+
+def test_a_tie_is_broken_by_cost_and_said():
+    X, y, X_val, y_val = labelled_by_both(40, 2, 2)
+    for prefer in ("cheapest_within_noise", "most_accurate"):
+        choice = ValidationChoice({"a": OneFeature(0), "b": OneFeature(1)}, ensemble=False, prefer=prefer,
+                                  relative_cost={"a": 1, "b": 2}, skip_unwinnable=False).fit(X, y, X_val, y_val)
+        assert choice.chosen_ == "a" and "a, b tie at held-out accuracy 0.9500; broken by cost" in choice.reason_
+        assert choice.report()["ties"].startswith("a, b tie")
+    with pytest.raises(InputError, match="model.prefer must be one of cheapest_within_noise, most_accurate"):
+        ValidationChoice({"a": OneFeature(0)}, prefer="fastest").fit(X, y, X_val, y_val)

@@ -59,12 +59,12 @@ def recordings(path, n=24, steps=64):
 def test_recordings_without_a_model_train_the_choice_within_its_budget(compose_config, tmp_path):
     path = recordings(tmp_path / "rig.npz")
     cfg = compose_config(["data=recordings_npz", f"data.path={path}", "trainer.max_epochs=2", "trainer.progress=false",
-                          "model.budget_s=0.001"])   # the cheapest always runs; nothing else fits in the budget
-    metrics = run(cfg, tmp_path / "run")
+                          "model.budget_s=0.001", "model.skip_unwinnable=false"])   # the cheapest always runs; nothing
+    metrics = run(cfg, tmp_path / "run")                                                # else fits in the budget
     choice = metrics["choice"]
-    assert choice["task"] == "recordings" and choice["chosen"] == "hydra_minirocket" and list(choice["validation"]) == [
-        "hydra_minirocket"]
-    assert list(choice["skipped"]) == ["prcnn", "rescnn", "inceptiontime"]   # cheapest first, by relative cost
+    assert choice["task"] == "recordings" and choice["chosen"] == "minirocket" and list(choice["validation"]) == [
+        "minirocket"]
+    assert list(choice["skipped"]) == ["hydra_minirocket", "prcnn", "rescnn", "inceptiontime"]   # by relative cost
     assert all("model.budget_s=0.001" in reason for reason in choice["skipped"].values())
     assert (tmp_path / "run" / "model.onnx").is_file()
 
@@ -73,6 +73,7 @@ def test_recordings_choose_the_better_model_on_validation_when_the_budget_allows
     path = recordings(tmp_path / "rig.npz")
     cfg = compose_config(["data=recordings_npz", f"data.path={path}", "trainer.max_epochs=2", "trainer.progress=false",
                           "model.budget_s=null", "model.candidates.recordings.hydra_minirocket.n_features=840",
+                          "model.skip_unwinnable=false", "~model.candidates.recordings.minirocket",
                           "~model.candidates.recordings.rescnn", "~model.candidates.recordings.inceptiontime"])
     metrics = run(cfg, tmp_path / "run")
     choice = metrics["choice"]
@@ -108,13 +109,14 @@ def test_a_declared_train_test_split_chooses_on_held_out_training_predictions_an
             monkeypatch.setattr(cls, method, spy)
     overrides = ["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "trainer.max_epochs=2",
                  "trainer.progress=false", "model.budget_s=null", "cost.onnx_latency_calls=0",
-                 "model.candidates.recordings.hydra_minirocket.n_features=840",
+                 "model.candidates.recordings.hydra_minirocket.n_features=840", "model.skip_unwinnable=false",
+                 "~model.candidates.recordings.minirocket",
                  "~model.candidates.recordings.rescnn", "~model.candidates.recordings.inceptiontime"]
     metrics = run(compose_config(overrides), tmp_path / "run")
     choice = metrics["choice"]
     assert choice["scored_on"] == {"rows": "training, held out", "n": 24,
                                    "by": {"hydra_minirocket": "leave-one-out", "prcnn": "3 stratified folds"}}
-    assert "held-out accuracy over all 24 training rows" in choice["reason"]
+    assert "held-out accuracy over all 24 training recordings" in choice["reason"]
     assert metrics["data"]["n_train_recordings"] + metrics["data"]["n_val_recordings"] == 24
     assert metrics["data"]["n_fit_recordings"] == 24 and "trained on every one" in metrics["data"]["validation"]
     assert metrics["val"]["accuracy"] == pytest.approx(choice["validation"][choice["chosen"]]["accuracy"])
@@ -128,6 +130,27 @@ def test_a_declared_train_test_split_chooses_on_held_out_training_predictions_an
     assert first_test > 0 and not any(row.tobytes() in test_rows for _, _, X in seen[:first_test] for row in X)
     again = run(compose_config(overrides), tmp_path / "again")   # same seed, same choice and scores
     assert again["choice"]["validation"] == choice["validation"] and again["test"] == metrics["test"]
+
+
+def test_the_default_fits_no_costlier_candidate_that_could_not_win_and_says_what_the_choice_cost(
+        compose_config, tmp_path, caplog):
+    """Tones MiniRocket gets (nearly) all right: no candidate could be significantly more accurate,
+    so none is fitted, each named with the reason; the log says the choosing apart from the chosen
+    model's own fit, and metrics.json holds the trade and both times."""
+    declared_train_test(tmp_path / "rig.npz")
+    overrides = ["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "trainer.progress=false",
+                 "cost.onnx_latency_calls=0", "model.candidates.recordings.minirocket.n_features=840"]
+    with caplog.at_level("INFO"):
+        metrics = run(compose_config(overrides), tmp_path / "run")
+    choice = metrics["choice"]
+    assert choice["chosen"] == "minirocket" and list(choice["validation"]) == ["minirocket"]
+    assert list(choice["skipped"]) == ["hydra_minirocket", "prcnn", "rescnn", "inceptiontime"]
+    assert all("can be significantly more accurate" in why and "of 24 scored recordings" in why
+               for why in choice["skipped"].values())
+    assert choice["prefer"] == "cheapest_within_noise" and choice["trade"]["kept"] == "minirocket"
+    assert choice["latency_ms"]["minirocket"] > 0
+    assert metrics["cost"]["chosen_fit_time_s"] == choice["fit_time_s"]["minirocket"] <= metrics["fit_time_s"]
+    assert "the chosen minirocket's own fit:" in caplog.text and "model choice took" in caplog.text
 
 
 @pytest.mark.parametrize("chosen_model, holds_out_itself", [(["model=minirocket", "model.n_features=840"], True),
