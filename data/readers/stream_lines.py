@@ -64,13 +64,13 @@ class LineFormat:
         if not text:
             return None
         fields = text.split(",")
-        if not self.seen_data and self.pick is None:
+        if not self.seen_data:   # only the first line may be a header
+            self.seen_data = True
             try:
                 _numbers(fields)
-            except BadLine:   # a first line of text: the header
+            except BadLine:
                 self.header(fields)
                 return None
-        self.seen_data = True
         if self.pick is not None:  # only the header's reading and time columns need be numbers
             if len(fields) != self.header_width:
                 raise BadLine(f"{len(fields)} values, expected {self.header_width} (the header's columns)")

@@ -16,6 +16,7 @@ from export.live.summary import Summary
 from export.live.writer import Writer
 
 BAD_LINE = ("skip", "stop")
+MOST_REPORTED = 1000   # a sensor sending garbage for hours must not bury the terminal
 
 
 def run_stream(source, kind, backlog, writer_args: tuple, on_bad_line: str = "skip", warn=print,
@@ -87,4 +88,7 @@ def _bad(message: str, summary, on_bad_line: str, warn) -> None:
     summary.skipped += 1
     if on_bad_line == "stop":
         raise InputError(f"{message} (on_bad_line=stop)")
-    warn(f"skipped {message}")
+    if summary.skipped <= MOST_REPORTED:
+        warn(f"skipped {message}")
+    if summary.skipped == MOST_REPORTED:
+        warn(f"{MOST_REPORTED} bad lines reported: further ones are counted in the summary, not printed")

@@ -50,3 +50,12 @@ def test_a_bad_line_says_why(line, why):
 def test_a_column_without_a_unit_takes_any_float32():
     assert LineFormat(["cell_r0_c0"]).parse("-5")[1].tolist() == [-5.0]
     assert np.isfinite(LineFormat(["cell"]).parse("3e38")[1]).all()
+
+
+def test_only_the_first_line_may_be_a_header():
+    lines = LineFormat(COLUMNS)
+    with pytest.raises(BadLine, match="header without"):
+        lines.parse("x,y")
+    assert lines.parse("1,2")[1].tolist() == [1.0, 2.0]
+    with pytest.raises(BadLine, match="'a_ohm' is not a number"):
+        lines.parse("a_ohm,b_ohm")
