@@ -53,6 +53,7 @@ bench: install                ## every bench that records (many hours on 2 cores
 	$(BENCH_ENV) $(PY) bench/fidelity.py --scene all
 	$(BENCH_ENV) $(PY) bench/scenes.py
 	$(BENCH_ENV) $(PY) bench/latency.py
+	$(BENCH_ENV) $(PY) bench/soak_stream.py
 	$(BENCH_ENV) $(PY) bench/threads.py
 	$(BENCH_ENV) $(PY) bench/large_table.py
 	$(BENCH_ENV) $(PY) train.py seed=0 hydra.run.dir=$(BENCH_TMP)/default_run

@@ -311,7 +311,8 @@ def stream(args: dict, threads: int | None) -> int:
     plot = None
     if PLOT in args or "plot_file" in args:
         from export.live.plot import LivePlot
-        plot = LivePlot(kind.input_columns, kind.columns, f"{Path(args['model']).name}: {args['input']}",
+        where = "standard input" if args["input"] == "-" else args["input"]
+        plot = LivePlot(kind.input_columns, kind.columns, f"{Path(args['model']).name} on {where}",
                         show=PLOT in args, file=args.get("plot_file"))
     source = open_source(args["input"], whole(args, "baud") or 115200, announce=_say)
     _say(f"reading {source.name}: one prediction per {'frame' if grid[0] else 'line'} "

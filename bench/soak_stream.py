@@ -58,6 +58,7 @@ OVERRIDES = {
                 "scene.characterisation_channels=window", f"seed={SEED}"],
 }
 SAMPLE_S = 0.25
+FIGURE = ROOT / "bench" / "figures" / "live_plot.png"
 
 
 def compose_run(kind: str):
@@ -152,6 +153,15 @@ def soak(model: Path, lines_file: Path, args: list[str], folder: Path, hop: int 
             "summary": figures, "stderr_tail": err.decode().strip().splitlines()[-2:]}
 
 
+def draw_live_view(model: Path, lines_file: Path, args: list[str], png: Path, n: int = 1500) -> None:
+    """predict.py's live view (plot_file=, the --plot figure) of the stream's first n lines."""
+    with open(lines_file) as file:
+        head = "".join(line for _, line in zip(range(n), file))
+    subprocess.run([sys.executable, str(ROOT / "predict.py"), f"model={model}", "input=-", "threads=1",
+                    f"plot_file={png}", *args], input=head, text=True, check=True,
+                   capture_output=True, cwd=ROOT)
+
+
 def expected_predictions(kind: str, n_lines: int, window: int, hop: int, rest: int) -> int:
     if kind == "recordings":
         return (n_lines - window) // hop + 1
@@ -165,6 +175,7 @@ def main(argv=None):
     parser.add_argument("--windows", type=int, default=100_000, help="recordings: windows predicted")
     parser.add_argument("--frames", type=int, default=1_000_000, help="tracker: frames streamed")
     parser.add_argument("--hop", type=int, default=4, help="recordings: steps between windows")
+    parser.add_argument("--plot-kind", default="table", help=f"the kind whose live view is drawn to {FIGURE}")
     args = parser.parse_args(argv)
     with recording("soak_stream", MEASURED_CODE) as record, tempfile.TemporaryDirectory() as tmp:
         for kind in args.kinds:
@@ -183,6 +194,8 @@ def main(argv=None):
                            lost=expected - figures["distinct_lines"], window_steps=window, hop=hop,
                            overrides=OVERRIDES[kind])
             record.add(kind, figures, seeds=[SEED])
+            if kind == args.plot_kind:
+                draw_live_view(model, folder / "stream.csv", extra, FIGURE)
             print(f"{kind}: {n_lines:,} lines, {figures['predictions']:,} predictions ({figures['lost']} lost, "
                   f"{figures['duplicated']} duplicated); RSS {figures['rss_after_warmup_mb']:.1f} -> "
                   f"{figures['rss_end_mb']:.1f} MB; p50 {figures['p50_first_us']:.0f} -> {figures['p50_last_us']:.0f} "
