@@ -29,6 +29,7 @@ from common.progress import phase
 from export.latency import log_costs, measure
 from export.pipelines import write_onnx
 from models.capabilities import capabilities
+from runs.calibration.run import run_calibration
 from runs.classification import run_classification
 from runs.config_checks import check_config
 from runs.regression import run_regression
@@ -59,6 +60,8 @@ def run(cfg: DictConfig, output_dir: str | Path, config_hash: str = "unknown") -
             datamodule = instantiate(cfg.data).setup()
             task = getattr(datamodule, "task", "regression")
             fit_and_report = run_classification if task == "classification" else run_regression
+            if cfg.get("calibration") is not None:   # experiment=calibrate: the scene fitted to the presses first
+                fit_and_report = run_calibration
             metrics, pipeline = fit_and_report(cfg, output_dir, datamodule, logger)
             model_path = None
             if cfg.export.enabled and not capabilities(pipeline.model).onnx_exportable:
