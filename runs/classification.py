@@ -16,7 +16,7 @@ metrics.json say so. Its model: a TableClassifier config (model=logistic_regress
 as it is; a tree config (model=extra_trees, random_forest, decision_tree) as the classifier of
 that kind with the same settings; the default (model=auto) as the choice on validation among its
 classification candidates (models/validation_choice.py), recordings among its recordings
-candidates; model=blend, which only regresses, as the recipe's `classifier` (recipe/blend.yaml:
+candidates; model=blend, which only regresses, as the `classifier` its YAML names (model/blend.yaml:
 extra trees). Other regressors are refused by name.
 """
 import logging

@@ -88,8 +88,8 @@ TIME_SERIES = {"model": {"prcnn", "rescnn", "inceptiontime", "lstm_fcn"},
                "data": {"timeseries", "fingertip", "base/timeseries", "recordings_npz", "recordings_table"},
                "scene": {"fingertip", "fingertip_minimal", "base/fingertip"},
                "trainer": {"tsc"}, "augment": {"virtual_force_levels"}, "size": {"paper"}}
-# model/base/*: what models share, composed through every model that inherits it (a base alone has
-# no recipe/<model>.yaml, and base/kfold no estimator)
+# model/base/*: what models share, composed through every model that inherits it (base/kfold has
+# no estimator of its own)
 MODEL_BASES = {"base/kfold", "base/tree", "base/timeseries_classifier"}
 
 

@@ -1,8 +1,9 @@
 """The configs do not depend on the order of the defaults list: every group is chosen in one
-place (configs/config.yaml, a model's recipe/<model>.yaml, an experiment, the command line), so
-composing with configs/config.yaml's defaults list reversed gives the same config. Experiments and
-the hyper-parameter search stay last in the reversed list: they are the layer that overrides the
-groups above by design (`@package _global_`, `override /group: ...`)."""
+place (configs/config.yaml, an experiment, the command line), so composing with configs/config.yaml's
+defaults list reversed gives the same config. Two layers override others by design and keep their
+place in the reversed list: a model's YAML may override the trainer and the extras (its recipe:
+model=prcnn trains with trainer=reference), so those two stay before model; experiments and the
+hyper-parameter search stay last (`@package _global_`, `override /group: ...`)."""
 import shutil
 from functools import cache
 from pathlib import Path
@@ -15,18 +16,20 @@ from omegaconf.errors import InterpolationResolutionError
 
 CONFIGS = Path(__file__).resolve().parents[2] / "configs"
 OVERRIDE_LAYER = ("experiment", "hparams_search")
+MODEL_OVERRIDES = ("trainer", "extras")   # what a model's YAML may override
 MODELS = sorted(p.stem for p in (CONFIGS / "model").glob("*.yaml"))
 EXPERIMENTS = sorted(p.stem for p in (CONFIGS / "experiment").glob("*.yaml"))
 # the configurations an experiment sweeps (experiment/<name>/*.yaml), each inside its experiment
 CONFIGURATIONS = [(f"experiment={folder.name}", f"+experiment/{folder.name}={path.stem}")
                   for folder in sorted((CONFIGS / "experiment").iterdir()) if folder.is_dir()
                   for path in sorted(folder.glob("*.yaml"))]
-# the trainer and extras each of these runs with: the model's recipe unless an experiment or the
-# command line says otherwise
+# the trainer and extras each of these runs with: the defaults (trainer=default, extras=quick) or
+# what the model's YAML overrides them with, unless an experiment or the command line says otherwise
 CHOSEN = {(): ("blend", "spread"),
           ("model=blend",): ("blend", "thorough"),
           ("model=resmlp",): ("default", "quick"),
           ("model=extra_trees",): ("default", "quick"),
+          ("model=knn",): ("default", "quick"),                 # a library estimator: its YAML alone
           ("model=prcnn",): ("reference", "quick"),
           ("model=lstm_fcn",): ("reference", "quick"),
           ("model=prcnn", "trainer=tsc", "extras=thorough"): ("tsc", "thorough"),
@@ -49,10 +52,14 @@ def reversed_configs(tmp_path_factory) -> Path:
     copy = tmp_path_factory.mktemp("reversed") / "configs"
     shutil.copytree(CONFIGS, copy)
     primary = yaml.safe_load((copy / "config.yaml").read_text())
-    layer = [e for e in primary["defaults"] if isinstance(e, dict) and next(iter(e)) in OVERRIDE_LAYER]
-    groups = [e for e in primary["defaults"] if e not in layer]
-    assert len(groups) > 2 and layer, primary["defaults"]
-    primary["defaults"] = groups[::-1] + layer
+    def named(*names):
+        return [e for e in primary["defaults"] if isinstance(e, dict) and next(iter(e)) in names]
+    layer, overridden, model = named(*OVERRIDE_LAYER), named(*MODEL_OVERRIDES), named("model")
+    groups = [e for e in primary["defaults"] if e not in layer + overridden]
+    assert len(groups) > 2 and layer and len(overridden) == 2 and model, primary["defaults"]
+    reversed_groups = groups[::-1]
+    at = reversed_groups.index(model[0])
+    primary["defaults"] = reversed_groups[:at] + overridden[::-1] + reversed_groups[at:] + layer
     (copy / "config.yaml").write_text(yaml.safe_dump(primary, sort_keys=False))
     return copy
 
@@ -102,14 +109,16 @@ def test_every_experiment_with_every_model_does_not_depend_on_the_order(experime
 
 
 @pytest.mark.parametrize("overrides, trainer_extras", CHOSEN.items(), ids=lambda o: " ".join(o) or "default")
-def test_the_trainer_and_extras_come_from_the_recipe_the_experiment_or_the_command_line(overrides, trainer_extras):
+def test_the_trainer_and_extras_come_from_the_model_the_experiment_or_the_command_line(overrides, trainer_extras):
     choices = composed(CONFIGS, overrides)["choices"]
     assert (choices["trainer"], choices["extras"]) == trainer_extras
 
 
-def test_model_configs_configure_the_model_only():
-    """A model file chooses no other group's option (that is recipe/<model>.yaml's job) and writes
-    nowhere but under `model`: its defaults name only model/ files, never `override` or `/group`."""
+def test_model_configs_configure_the_model_and_at_most_its_trainer_and_extras():
+    """A model file writes nowhere but under `model`: its defaults name model/ files, or override
+    the trainer or the extras it trains with (`override /trainer@_global_.trainer: reference`);
+    model=blend, which only regresses, also names the classifier a class-label table trains."""
+    allowed = tuple(f"override /{group}@_global_.{group}" for group in MODEL_OVERRIDES)
     offending = []
     for path in sorted((CONFIGS / "model").rglob("*.yaml")):
         text = path.read_text()
@@ -117,10 +126,8 @@ def test_model_configs_configure_the_model_only():
             offending.append(f"{path.name}: {text.splitlines()[0]}")
         for entry in (yaml.safe_load(text) or {}).get("defaults", []):
             name = entry if isinstance(entry, str) else next(iter(entry))
+            if name in allowed or (path.name == "blend.yaml" and name == "extra_trees@_global_.classifier"):
+                continue
             if name.startswith(("override ", "/")) or "@_global_" in name:
                 offending.append(f"{path.name}: {entry}")
     assert not offending, offending
-
-
-def test_every_model_has_a_recipe_and_every_recipe_a_model():
-    assert MODELS == sorted(p.stem for p in (CONFIGS / "recipe").glob("*.yaml"))
