@@ -182,6 +182,8 @@ def run_touchstone(path: Path, method: str, seed: int, run_dir: Path, limit_s: f
             "chosen": metrics.get("choice", {}).get("chosen"), "reason": metrics.get("choice", {}).get("reason"),
             "scored_on": metrics.get("choice", {}).get("scored_on"),
             "skipped": list(metrics.get("choice", {}).get("skipped", {})),
+            "chosen_fit_s": metrics.get("cost", {}).get("chosen_fit_time_s"),
+            "trade": metrics.get("choice", {}).get("trade"),
             "best_epoch": training.get("best_epoch"), "fold_best_epochs": training.get("fold_best_epochs"),
             "load": load}
 

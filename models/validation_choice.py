@@ -40,6 +40,9 @@ fitted when it could not change the choice:
 when the one kept is wrong on e rows, a candidate right on all of them reaches z = sqrt(e) at most,
 so with sqrt(e) <= significance_z none can be significantly more accurate (`most_accurate`: when
 e = 0); each is named in `skipped_` with that reason.
+Successive halving for the candidates trained for epochs (`halving`, e.g. 3; null: off): before any
+net's full fit, every net still worth fitting is trained for 1/halving of its epochs and scored as
+its full fit would be, and only the best 1/halving of them go on (`rungs_`, `skipped_`).
 
 What the candidates are scored on (`score_on`): `validation` (and `auto`, which a run may resolve to
 `training`), the validation rows given to `fit` (or carved from the training rows when none are); `training`, every candidate fitted on all the
@@ -59,6 +62,7 @@ picks the set.
 """
 import inspect
 import logging
+import math
 import time
 
 import numpy as np
@@ -68,7 +72,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from common.errors import InputError
 from data.splits.indices import carve_validation
-from models.capabilities import declare
+from models.capabilities import capabilities, declare
 from models.epoch_callback import member_callback
 from models.estimator_base import TouchstoneEstimator
 from models.paired_accuracy import accuracy_difference, best_reachable_z, significantly_better
@@ -99,8 +103,9 @@ def _fit_kwargs(estimator, **kwargs) -> dict:
 class ValidationChoice(TouchstoneEstimator):
     def __init__(self, candidates=None, task="auto", budget_s=None, relative_cost=None, ensemble=True,
                  val_fraction=0.15, significance_z=1.96, seed=0, score_on="auto", prefer="cheapest_within_noise",
-                 skip_unwinnable: bool | list = True, latency_factor=2.0):
+                 skip_unwinnable: bool | list = True, latency_factor=2.0, halving: int | None = None):
         self.candidates = candidates
+        self.halving = halving
         self.prefer = prefer
         self.skip_unwinnable = skip_unwinnable
         self.latency_factor = latency_factor
@@ -151,6 +156,9 @@ class ValidationChoice(TouchstoneEstimator):
                                                           and set(self.skip_unwinnable) <= set(TASKS))):
             raise InputError(f"model.skip_unwinnable must be true, false or a list of {', '.join(TASKS)}, "
                              f"got {self.skip_unwinnable!r}")
+        if self.halving is not None and (isinstance(self.halving, bool) or not isinstance(self.halving, int)
+                                         or self.halving < 2):
+            raise InputError(f"model.halving must be a whole number >= 2 or null, got {self.halving!r}")
         if not (isinstance(self.latency_factor, (int, float)) and self.latency_factor >= 1):
             raise InputError(f"model.latency_factor must be a number >= 1, got {self.latency_factor!r}")
         if self.score_on not in SCORE_ON:
@@ -214,20 +222,30 @@ class ValidationChoice(TouchstoneEstimator):
         self.models_, self.scores_, self.fit_time_s_, self.skipped_, self.latency_ms_ = {}, {}, {}, {}, {}
         ranks, outputs, start, spent_per_cost = {}, {}, time.perf_counter(), []
         self.unit_ = "recordings" if self.task_ == "recordings" else "rows"
+        def fitted(name, estimator, label):
+            """(the fitted clone, its seconds, what it is scored on)."""
+            began = time.perf_counter()
+            model = clone(estimator).fit(X, y, **_fit_kwargs(
+                estimator, X_val=X_val, y_val=y_val, groups=groups,
+                epoch_callback=member_callback(epoch_callback, label) if epoch_callback else None))
+            seconds = time.perf_counter() - began
+            return model, seconds, self._held_out(name, model) if on_training else self._output(model, X_val)
+
+        nets = [name for name in order if self._halves(candidates[name])] if self.halving else []
+        self.rungs_ = {}
         for name in order:
-            elapsed = time.perf_counter() - start
-            reason = self._why_not(name, costs[name], elapsed, spent_per_cost, outputs, y_scored)
+            reason = self.skipped_.get(name) or self._why_not(name, costs[name], time.perf_counter() - start,
+                                                               spent_per_cost, outputs, y_scored)
+            if reason is None and len(nets) > 1 and name in nets and not self.rungs_:
+                self._first_rung(nets[nets.index(name):], candidates, costs, fitted, start, spent_per_cost,
+                                 outputs, y_scored)
+                reason = self.skipped_.get(name)
             if reason is not None:
                 self.skipped_[name] = reason
                 log.info("model choice: %s skipped, %s", name, reason)
                 continue
-            began = time.perf_counter()
-            model = clone(candidates[name]).fit(X, y, **_fit_kwargs(
-                candidates[name], X_val=X_val, y_val=y_val, groups=groups,
-                epoch_callback=member_callback(epoch_callback, name) if epoch_callback else None))
-            self.fit_time_s_[name] = time.perf_counter() - began
+            model, self.fit_time_s_[name], outputs[name] = fitted(name, candidates[name], name)
             spent_per_cost.append(self.fit_time_s_[name] / costs[name])
-            outputs[name] = self._held_out(name, model) if on_training else self._output(model, X_val)
             ranks[name], self.scores_[name] = self._score(y_scored, outputs[name])
             self.models_[name] = model
             if self.task_ != "regression":
@@ -277,6 +295,39 @@ class ValidationChoice(TouchstoneEstimator):
                         f"measured per unit) exceeds the {max(self.budget_s - elapsed, 0):.1f} s left of "
                         f"model.budget_s={self.budget_s:g}")
         return None
+
+    @staticmethod
+    def _halves(estimator) -> bool:
+        """A candidate trained for epochs (a net): successive halving applies to it."""
+        return capabilities(estimator).epochs and "max_epochs" in estimator.get_params()
+
+    def _first_rung(self, nets, candidates, costs, fitted, start, spent_per_cost, outputs, y_scored):
+        """Successive halving's first rung: every net still worth fitting (the budget and
+        skip_unwinnable judged at 1/halving of its cost) trained for 1/halving of its epochs and
+        scored as a full fit would be; only the best 1/halving of them by that held-out accuracy
+        (ties: the cheaper) go on to their full fit, the others are named in skipped_ with their
+        rung's score (rungs_: each rung's epochs, accuracy and seconds)."""
+        for name in nets:
+            reason = self._why_not(name, costs[name] / self.halving, time.perf_counter() - start, spent_per_cost,
+                                   outputs, y_scored)
+            if reason is not None:
+                self.skipped_[name] = reason
+                continue
+            epochs = max(1, math.ceil(candidates[name].get_params()["max_epochs"] / self.halving))
+            estimator = clone(candidates[name]).set_params(max_epochs=epochs)
+            _, seconds, output = fitted(name, estimator, f"{name}/rung1")
+            spent_per_cost.append(seconds / (costs[name] / self.halving))
+            accuracy = self._score(y_scored, output)[1]["accuracy"]
+            self.rungs_[name] = {"epochs": epochs, "accuracy": accuracy, "fit_time_s": seconds}
+            log.info("model choice: %s, successive halving's first rung (%d epochs, %.1f s): held-out accuracy %.4f",
+                     name, epochs, seconds, accuracy)
+        ranked = sorted(self.rungs_, key=lambda name: -self.rungs_[name]["accuracy"])   # stable: the cheaper first
+        going_on = ranked[:math.ceil(len(ranked) / self.halving)]
+        for name in ranked[len(going_on):]:
+            self.skipped_[name] = (f"successive halving: {self.rungs_[name]['epochs']} epochs gave held-out accuracy "
+                                   f"{self.rungs_[name]['accuracy']:.4f} where {going_on[0]} gave "
+                                   f"{self.rungs_[going_on[0]]['accuracy']:.4f}; only the best {len(going_on)} of "
+                                   f"{len(ranked)} went on to a full fit (model.halving={self.halving:g})")
 
     def _skips_unwinnable(self) -> bool:
         """skip_unwinnable: true (every class task), false, or the tasks it applies to."""
@@ -395,4 +446,5 @@ class ValidationChoice(TouchstoneEstimator):
         return {"task": self.task_, "chosen": self.chosen_, "reason": self.reason_, "budget_s": self.budget_s,
                 "scored_on": self.scored_on_, "validation": self.scores_, "fit_time_s": self.fit_time_s_, "skipped": self.skipped_,
                 "ensemble_weights": self.ensemble_weights_, "prefer": self.prefer, "latency_ms": self.latency_ms_,
-                "ties": self.ties_, "trade": self.trade_, "choosing_s": self.choosing_s_}
+                "ties": self.ties_, "trade": self.trade_, "choosing_s": self.choosing_s_,
+                "rungs": self.rungs_}

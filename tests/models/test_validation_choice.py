@@ -304,3 +304,41 @@ def test_a_tie_is_broken_by_cost_and_said():
         assert choice.report()["ties"].startswith("a, b tie")
     with pytest.raises(InputError, match="model.prefer must be one of cheapest_within_noise, most_accurate"):
         ValidationChoice({"a": OneFeature(0)}, prefer="fastest").fit(X, y, X_val, y_val)
+
+
+class ShortFitNet(OneFeature):
+    """A stand-in net: trained for epochs (max_epochs), each fit noted in `fits`."""
+    fits = []
+
+    def __init__(self, feature=0, max_epochs=30):
+        super().__init__(feature)
+        self.max_epochs = max_epochs
+
+    def __sklearn_tags__(self):
+        from models.capabilities import declare
+        return declare(super().__sklearn_tags__(), epochs=True)
+
+    def fit(self, X, y, X_val=None, y_val=None):
+        ShortFitNet.fits.append((self.feature, self.max_epochs))
+        return super().fit(X, y, X_val, y_val)
+
+
+def test_successive_halving_fits_every_net_short_and_only_the_best_third_in_full():
+    rng = np.random.default_rng(0)
+    X = rng.standard_normal((100, 4))
+    y_val = rng.integers(0, 2, 40)
+    X_val = np.repeat(np.where(y_val == 1, 1.0, -1.0)[:, None], 4, axis=1)
+    X_val[:10, 0] *= -1                     # the cheap one: 10 of 40 wrong, so the nets could still win
+    X_val[10:18, 1] *= -1                   # net a: 8 wrong; net b: none; net c: 12 wrong
+    X_val[18:30, 3] *= -1
+    ShortFitNet.fits = []
+    choice = ValidationChoice({"cheap": OneFeature(0), "a": ShortFitNet(1), "b": ShortFitNet(2), "c": ShortFitNet(3)},
+                              ensemble=False, relative_cost={"cheap": 1, "a": 5, "b": 6, "c": 7}, halving=3)
+    choice.fit(X, (X[:, 0] > 0).astype(int), X_val, y_val)
+    assert ShortFitNet.fits == [(1, 10), (2, 10), (3, 10), (2, 30)]    # three short fits, one full
+    assert choice.chosen_ == "b" and set(choice.models_) == {"cheap", "b"}
+    assert choice.rungs_["a"] == {"epochs": 10, "accuracy": 0.8, "fit_time_s": pytest.approx(0, abs=1)}
+    assert "successive halving: 10 epochs gave held-out accuracy 0.8000 where b gave 1.0000" in choice.skipped_["a"]
+    assert list(choice.skipped_) == ["a", "c"] and choice.report()["rungs"]["c"]["accuracy"] == 0.7
+    with pytest.raises(InputError, match="model.halving must be a whole number >= 2 or null"):
+        ValidationChoice({"cheap": OneFeature(0)}, halving=1).fit(X, (X[:, 0] > 0).astype(int), X_val, y_val)
