@@ -92,6 +92,11 @@ FIDELITY_SCENES = ("rubber12", "fingertip", "capacitive6x6", "ert", "taxels")
 VERDICT = {True: "holds", False: "does not hold", None: "not measured"}
 
 
+def fidelity_verdict(row: dict) -> str:
+    """A row the paper cannot support (its record names what the paper leaves out) has a verdict of its own."""
+    return "not supported by the paper" if row.get("unsupported") else VERDICT[row["holds"]]
+
+
 def fidelity_rows(scene: str) -> list[dict]:
     """The newest record of each of the scene's rows, in row order."""
     records = newest("fidelity", lambda name: name.startswith(f"{scene}/"))
@@ -107,10 +112,15 @@ def fidelity_table(scene: str):
     for record in records:
         row = record["values"]
         cells = [row["number"], row["statement"], row["paper"], row["value"], row["tolerance"] or "—",
-                 VERDICT[row["holds"]]]
+                 fidelity_verdict(row)]
         lines.append("| " + " | ".join(map(cell, cells)) + " |")
-    held = sum(record["values"]["holds"] is True for record in records)
-    return f"**{held} of {len(records)} rows hold** (`scene={records[0]['values']['config']}`)\n\n" + "\n".join(lines), records
+    supported = [r["values"] for r in records if not r["values"].get("unsupported")]
+    held = sum(row["holds"] is True for row in supported)
+    missing = [f"- **{r['values']['number']}**: {r['values']['unsupported']}" for r in records
+               if r["values"].get("unsupported")]
+    unsupported = ("\n\nNot supported by the paper (not counted):\n\n" + "\n".join(missing)) if missing else ""
+    return (f"**{held} of {len(supported)} rows the paper supports hold** (`scene={records[0]['values']['config']}`)"
+            f"\n\n" + "\n".join(lines) + unsupported), records
 
 
 for _scene in FIDELITY_SCENES:
@@ -119,17 +129,22 @@ for _scene in FIDELITY_SCENES:
 
 @table("fidelity/summary")
 def fidelity_summary():
-    lines = ["| scene | rows that hold | that do not hold | not measured |", "|---|---|---|---|"]
-    used, held_all, total = [], 0, 0
+    lines = ["| scene | rows that hold | that do not hold | not measured | not supported by the paper |",
+             "|---|---|---|---|---|"]
+    used, held_all, total, unsupported_all = [], 0, 0, 0
     for scene in FIDELITY_SCENES:
         records = fidelity_rows(scene)
         used += records
-        by_verdict = {verdict: [r["values"]["number"] for r in records if r["values"]["holds"] is verdict]
-                      for verdict in (True, False, None)}
-        lines.append(f"| {scene} ({len(by_verdict[True])} of {len(records)}) | {', '.join(by_verdict[True]) or '—'} | "
-                     f"{', '.join(by_verdict[False]) or '—'} | {', '.join(by_verdict[None]) or '—'} |")
-        held_all, total = held_all + len(by_verdict[True]), total + len(records)
-    return f"**{held_all} of {total} rows hold.**\n\n" + "\n".join(lines), used
+        verdicts = [fidelity_verdict(r["values"]) for r in records]
+        by_verdict = {v: [r["values"]["number"] for r, rv in zip(records, verdicts) if rv == v]
+                      for v in (*VERDICT.values(), "not supported by the paper")}
+        supported = len(records) - len(by_verdict["not supported by the paper"])
+        lines.append(f"| {scene} ({len(by_verdict['holds'])} of {supported}) | "
+                     + " | ".join(", ".join(numbers) or "—" for numbers in by_verdict.values()) + " |")
+        held_all, total = held_all + len(by_verdict["holds"]), total + supported
+        unsupported_all += len(by_verdict["not supported by the paper"])
+    return (f"**{held_all} of the {total} rows the papers support hold** ({unsupported_all} rows the papers cannot "
+            f"support, not counted).\n\n" + "\n".join(lines)), used
 
 
 # ---- contact tracking speed (bench/contacts.py) --------------------------------------------------
@@ -179,7 +194,8 @@ def spread_or_missing(values, spec: str) -> str:
 @table("tsc_peers/two_sets")
 def tsc_peers_two_sets():
     """The bench-quick comparison: the same MiniRocket on the same official splits, ours and aeon's."""
-    records = newest("tsc_peers", lambda name: not name.startswith("quick/"))
+    records = [r for r in newest("tsc_peers", lambda name: not name.startswith("quick/"))
+               if "tsc_peers_two_sets" in r["command"]]   # the bench-quick run's own records
     lines = ["| set | method | side | test accuracy | fit (s) | latency per recording (ms) | seeds |",
              "|---|---|---|---|---|---|---|"]
     for record in sorted(records, key=lambda r: (r["values"]["set"], r["values"]["method"])):
@@ -189,6 +205,47 @@ def tsc_peers_two_sets():
                      f"{spread_or_missing(values['latency_ms'], '.2f')} | {seeds_label(record['seeds'])} |")
     note = ("Official train/test splits of the sets aeon's wheel ships; one thread; fit is the fit alone; latency is "
             "one recording at a time (Touchstone: onnxruntime p50; aeon: median of single-recording predict calls).")
+    return "\n".join(lines) + "\n\n" + note, records
+
+
+def _default_choices(runs: list[dict]) -> str:
+    """What the default kept over its seeds, how often a costlier one was more accurate but within
+    noise (the cost rule), and which candidates it did not fit."""
+    kept = {}
+    for run in runs:
+        if run.get("chosen"):
+            kept[run["chosen"]] = kept.get(run["chosen"], 0) + 1
+    text = ", ".join(f"`{name}` × {count}" for name, count in kept.items())
+    traded = [r["trade"] for r in runs if r.get("trade") and r["trade"]["kept"] != r["trade"]["most_accurate"]]
+    if traded:
+        given = [t["accuracy_given_up"]["difference"] for t in traded]
+        text += (f"; cost rule kept the cheaper on {len(traded)} of {len(runs)} (gave up "
+                 f"{min(given):.3f}–{max(given):.3f} held-out accuracy)")
+    skipped = sorted({name for r in runs for name in r.get("skipped") or []})
+    if skipped:
+        text += f"; not fitted: {', '.join(skipped)}"
+    return text
+
+
+@table("tsc_peers/default_against_aeon")
+def tsc_peers_default_against_aeon():
+    """The default (no model=) and MiniRocket against aeon's MiniRocket and MultiRocket-Hydra, per
+    set, with what the default kept and why (bench/tsc_peers.py runs with the default in them)."""
+    records = [r for r in newest("tsc_peers", lambda name: not name.startswith("quick/"))
+               if " default" in r["command"] and "tsc_peers_two_sets" not in r["command"]]
+    lines = ["| set | method | test accuracy | fit (s) | latency per recording (ms) | load | kept (default) |",
+             "|---|---|---|---|---|---|---|"]
+    for record in sorted(records, key=lambda r: (r["values"]["set"], not r["values"]["method"].startswith("aeon"),
+                                                 r["values"]["method"])):
+        values = record["values"]
+        loads = [r["load"] for r in values["runs"] if r.get("load") is not None]
+        lines.append(f"| {values['set']} | `{values['method']}` | {spread_or_missing(values['accuracy'], '.4f')} | "
+                     f"{spread_or_missing(values['fit_s'], '.2f')} | {spread_or_missing(values['latency_ms'], '.2f')} | "
+                     f"{min(loads):.1f}–{max(loads):.1f} | {cell(_default_choices(values['runs']))} |")
+    note = ("Official train/test splits; one thread; mean ± sd over the seeds named below the table. Touchstone's "
+            "fit is the whole fit (the default's: every candidate it fitted and the choosing), latency the exported "
+            "graph's onnxruntime p50 at batch 1; aeon's latency the median of single-recording predict calls. Load is "
+            "the 1-minute load average of the 2-core machine before each run (other work ran beside it).")
     return "\n".join(lines) + "\n\n" + note, records
 
 

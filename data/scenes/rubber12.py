@@ -140,11 +140,13 @@ class Rubber12Scene:
             xy = points[point]
             depth = np.linspace(low, high, self.n_depth_steps)[level]
             unloading = np.r_[False, (point[1:] == point[:-1]) & (level[1:] < level[:-1])]
-            return xy[:, 0], xy[:, 1], depth, point * self.n_depth_steps + level, unloading
+            cycle = np.arange(n) // len(depth_steps)          # one indentation cycle: a point's depth sweep
+            return xy[:, 0], xy[:, 1], depth, point * self.n_depth_steps + level, unloading, cycle
         rng = random_generator_for(self.seed, "protocol")
         lo, hi = self.position_range_mm
         xy = rng.uniform(lo, hi, size=(n, 2))
-        return xy[:, 0], xy[:, 1], rng.uniform(low, high, size=n), np.arange(n), np.zeros(n, dtype=bool)
+        return (xy[:, 0], xy[:, 1], rng.uniform(low, high, size=n), np.arange(n), np.zeros(n, dtype=bool),
+                np.arange(n))
 
     # -- simulation -------------------------------------------------------------------------
     def _solvers(self):
@@ -156,10 +158,13 @@ class Rubber12Scene:
         self._check()
         return self.simulate(*self._presses())
 
-    def simulate(self, x_mm, y_mm, depth_mm, groups=None, unloading=None, chunk: int = 1024) -> SensorTable:
-        """Readings for arbitrary presses (arrays of x, y, depth in mm), through the listed effects."""
+    def simulate(self, x_mm, y_mm, depth_mm, groups=None, unloading=None, cycle=None,
+                 chunk: int = 1024) -> SensorTable:
+        """Readings for arbitrary presses (arrays of x, y, depth in mm), through the listed effects;
+        `cycle` numbers each press's indentation cycle (default: every press its own)."""
         x, y, depth = (np.atleast_1d(np.asarray(v, dtype=float)) for v in (x_mm, y_mm, depth_mm))
         groups = np.arange(len(x)) if groups is None else np.asarray(groups)
+        cycle = np.arange(len(x)) if cycle is None else np.asarray(cycle, dtype=int)
         unloading = np.zeros(len(x), dtype=bool) if unloading is None else np.asarray(unloading, dtype=bool)
         effects = resolve_effects(self.name, self.effects, EFFECTS)
         field_effects = [e for e in effects if e[0] in FIELD_EFFECTS]
@@ -178,7 +183,7 @@ class Rubber12Scene:
         for start in range(0, n, chunk):
             part = slice(start, min(start + chunk, n))
             state = {"x_mm": x[part], "y_mm": y[part], "depth_mm": depth[part],
-                     "unloading": unloading[part], "node_xy_mm": node_xy, "geometry": geometry}
+                     "unloading": unloading[part], "cycle": cycle[part], "node_xy_mm": node_xy, "geometry": geometry}
             for name, fn, params in field_effects:
                 # A field effect that draws (a per-sensor property) gets its own generator, the
                 # same one in every chunk, so it draws the same sensor each time.

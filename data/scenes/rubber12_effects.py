@@ -199,6 +199,27 @@ def hysteresis(state, loss_fraction=0.10):
     state["film_area_strain"] = state["film_area_strain"] * factor
 
 
+def cycle_response(state, rng, gain_sd=0.0):
+    """The film's response amplitude differs from one indentation cycle to the next.
+
+    Carbon-black rubber's conducting network is partly broken by each stretch and recovers
+    slowly (the electrical Mullins effect: Mullins, Rubber Chem. Technol. 21 (1948) 281), so
+    two indentations of the same point do not strain the network alike. The film strain of
+    every press of a cycle (a lab point's depth sweep; a random-protocol press on its own) is
+    scaled by one draw of 1 + gain_sd * N(0, 1). No source gives its size for this film; the
+    config sizes gain_sd to the paper's own repeatability, "a coefficient of variation below
+    2.3 % across all channels" (§II-E), not to the Table II it is judged by.
+    """
+    stretch = _needs(state, "film_stretch", "cycle_response", "contact")
+    if gain_sd < 0:
+        raise InputError(f"scene rubber12: cycle_response needs gain_sd >= 0, got {gain_sd}")
+    cycle = state["cycle"]
+    # one draw per cycle, indexed by the cycle's number: every chunk redraws the same sequence
+    scale = 1.0 + gain_sd * rng.standard_normal(int(cycle.max()) + 1 if cycle.size else 0)[cycle]
+    state["film_stretch"] = stretch * scale[:, None]
+    state["film_area_strain"] = state["film_area_strain"] * scale[:, None]
+
+
 def percolation(state, filler_fraction=0.045, percolation_threshold=0.040, exponent=2.0,
                 junction_loss_per_strain=1.0, floor=1.0e-3):
     """Percolation scaling of conductivity as stretching breaks conducting junctions.
@@ -344,7 +365,8 @@ def minmax_normalize(state, rng):
 
 
 FIELD_EFFECTS = {"specimen": specimen, "contact": contact, "gel_edges": gel_edges, "large_strain": large_strain,
-                 "relaxation": relaxation, "hysteresis": hysteresis, "percolation": percolation,
+                 "relaxation": relaxation, "hysteresis": hysteresis, "cycle_response": cycle_response,
+                 "percolation": percolation,
                  "tunneling": tunneling}
 READING_EFFECTS = {"electrode_contact": electrode_contact, "temperature_drift": temperature_drift,
                    "adc": adc, "outlier_rejection": outlier_rejection, "load_cell": load_cell,

@@ -16,6 +16,8 @@ from pathlib import Path
 from hydra import compose, initialize_config_dir
 from omegaconf import OmegaConf
 
+from runs.fidelity.registered import registration
+
 ROOT = Path(__file__).resolve().parents[2]
 # seed 000, 003, 001, 002, 004 (../shared/notes/seed-observations.md)
 CHECKS: dict[str, list] = {"rubber12": [], "fingertip": [], "capacitive6x6": [], "ert": [], "taxels": []}
@@ -34,6 +36,7 @@ class Measured:
     holds: bool | None              # None: not measured by this table (value says why)
     tolerance: str = ""
     numbers: dict = field(default_factory=dict)
+    unsupported: str = ""           # not empty: the paper cannot support the row (what it leaves out)
 
 
 @dataclass
@@ -89,12 +92,33 @@ def make_probe(scene: str, overrides=(), repeats: int | None = None, config: str
     return PROBES.get(scene, SceneConfig)(scene_params(config or CONFIGS[scene], overrides), **size)
 
 
+def row_order(number: str) -> tuple[int, str]:
+    """'3a' -> (3, 'a'): rows in the paper's order whichever module registered them."""
+    digits = number.rstrip("abcdefghijklmnopqrstuvwxyz")
+    return int(digits), number[len(digits):]
+
+
 def run_checks(scene: str, probe) -> list[Row]:
+    """Measure every row of `scene`; a row pre-registered from the paper (runs/fidelity/registered/)
+    must be judged by its registered tolerance, and a row the paper cannot support says so."""
     rows = []
-    for fn in CHECKS[scene]:
+    for fn in sorted(CHECKS[scene], key=lambda fn: row_order(fn.observation[1])):
         name, number, statement, paper = fn.observation
-        rows.append(Row(name, number, statement, paper, fn(probe)))
+        measured = fn(probe)
+        registered = registration(name, number)
+        if registered is not None:
+            if measured.holds is not None and not measured.tolerance.startswith(registered.tolerance):
+                raise RuntimeError(f"fidelity row {name}/{number} was judged by '{measured.tolerance}', not by its "
+                                   f"registered tolerance '{registered.tolerance}' (runs/fidelity/registered/)")
+            measured.unsupported = registered.missing
+        rows.append(Row(name, number, statement, paper, measured))
     return rows
+
+
+def verdict(measured: Measured) -> str:
+    if measured.unsupported:
+        return "not supported by the paper"
+    return {True: "holds", False: "does not hold", None: "not measured"}[measured.holds]
 
 
 def seeds_label(seeds) -> str:
@@ -122,11 +146,10 @@ def scene_params(config: str, overrides=()) -> dict:
 
 
 def markdown(rows) -> str:
-    verdict = {True: "holds", False: "does not hold", None: "not measured"}
     lines = ["| # | paper's observation | paper's number | scene's measurement | tolerance | verdict |",
              "|---|---|---|---|---|---|"]
     for row in rows:
         m = row.measured
         lines.append(f"| {row.number} | {row.statement} | {row.paper} | {m.value} | {m.tolerance or '—'} | "
-                     f"{verdict[m.holds]} |")
+                     f"{verdict(m)} |")
     return "\n".join(lines)

@@ -322,3 +322,24 @@ def test_film_strain_is_incompressible_and_only_where_the_gel_moves():
     assert np.all(stretch >= 0) and stretch[distance <= 3.5].min() > 0
     assert np.all(stretch[distance > 3.5 + 4 * 6.0] == 0)      # nothing beyond a few gel thicknesses
     assert stretch[distance > 3.5].max() > stretch[distance <= 3.5].max()   # the rim stretches most
+
+
+def test_cycle_response_makes_two_cycles_of_the_same_presses_differ():
+    # 90 lab presses cover P1-P9 once (ten depths each), so presses 0-9 and 90-99 are P1's first
+    # and second indentation cycles: the same presses, two draws of the film's response.
+    effects = {**PHYSICS, "cycle_response": {"gain_sd": 0.2}}
+    varied = Rubber12Scene(n_samples=100, effects=effects, progress=False).generate()
+    plain = Rubber12Scene(n_samples=100, effects=PHYSICS, progress=False).generate()
+    rest = press(25.0, 25.0, 0.0, measurement="near_opposite").channels[0]
+    change = varied.channels / rest - 1, plain.channels / rest - 1
+    np.testing.assert_array_equal(varied.frame["depth_mm"], plain.frame["depth_mm"])
+    first, second = (change[0][rows] for rows in (slice(0, 10), slice(90, 100)))
+    assert not np.allclose(first, second, rtol=1e-3)                  # the same presses, another cycle
+    np.testing.assert_array_equal(change[1][0:10], change[1][90:100])  # without the effect: identical
+    zero = Rubber12Scene(n_samples=100, effects={**PHYSICS, "cycle_response": {"gain_sd": 0.0}}, progress=False)
+    np.testing.assert_array_equal(zero.generate().channels, plain.channels)
+
+
+def test_cycle_response_rejects_a_negative_spread():
+    with pytest.raises(InputError, match="gain_sd"):
+        Rubber12Scene(n_samples=10, effects={**PHYSICS, "cycle_response": {"gain_sd": -0.1}}, progress=False).generate()

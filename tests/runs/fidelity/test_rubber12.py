@@ -20,7 +20,8 @@ def probe():
 
 
 def test_every_observation_of_the_notes_has_a_row():
-    numbers = [fn.observation[1] for fn in CHECKS["rubber12"]]
+    from runs.fidelity.observations import row_order
+    numbers = sorted((fn.observation[1] for fn in CHECKS["rubber12"]), key=row_order)
     assert [n.rstrip("ab") for n in numbers] == ["1", "2", "3", "3", "4", "5", "6", "7", "8", "9", "10",
                                                  "11", "12", "13"]
     from runs.fidelity.observations import load_scene
@@ -42,7 +43,20 @@ def test_rows_are_measured_at_three_scene_seeds(probe):
 
 def test_repeat_variation_stays_below_the_labs(probe):
     cv = by_seed(checks.repeat_cv(probe), "max_cv")
-    assert (cv > 0.0).all() and (cv < 0.8 * 0.023).all()                  # table: 0.27 ± 0.01 %
+    # cycle_response is sized to the paper's bound on the lab table's 90 pairs, so at one depth the
+    # largest CV sits below the bound but well above the 0.3 % of the scene without it
+    assert (cv > 0.4 * 0.023).all() and (cv < 0.023).all()
+
+
+def test_force_varies_by_position_beyond_the_repeat_variation(probe):
+    cv = by_seed(checks.force_varies_with_position(probe), "min_cv")
+    assert (cv > 1.2 * 0.023).all()                                     # the smallest, at 3 mm
+
+
+def test_cycle_response_is_sized_below_the_papers_repeat_cv():
+    from runs.fidelity.rubber12_sizing import lab_repeat_cv
+    cv = lab_repeat_cv(SceneProbe(scene_params("rubber12")))
+    assert (cv < 0.023).all() and (cv > 0.5 * 0.023).all()
 
 
 def test_resistance_is_nonlinear_in_depth(probe):
@@ -102,13 +116,25 @@ def test_a_row_that_flips_on_one_seed_does_not_hold_and_says_so():
 
 
 def test_table_prints_every_row_with_a_verdict(probe, capsys):
-    rows = [Row("rubber12", *fn.observation[1:], fn(probe)) for fn in CHECKS["rubber12"]
-            if fn not in (checks.extra_trees_r2, checks.uncertainty_pattern)]   # the forest rows are slow
+    rows = [Row("rubber12", *fn.observation[1:], fn(probe)) for fn in CHECKS["rubber12"]   # model rows are slow
+            if fn is not checks.extra_trees_r2 and fn.__module__ != "runs.fidelity.rubber12_selection"]
     text = markdown(rows)
     assert text.count("\n") == len(rows) + 1
     verdicts = [line.rsplit("|", 2)[-2].strip() for line in text.splitlines()[2:]]
-    assert set(verdicts) <= {"holds", "does not hold", "not measured"} and "holds" in verdicts
+    assert set(verdicts) <= {"holds", "does not hold", "not measured", "not supported by the paper"}
+    assert "holds" in verdicts
     json.dumps([asdict(row) for row in rows])   # the --json output is serialisable
+
+
+@pytest.mark.slow
+def test_selection_rows_use_the_papers_statistics():
+    from runs.fidelity.rubber12_selection import extra_trees_selected, uncertainty_pattern
+    one = SceneProbe(scene_params("rubber12"), seeds=(0,))
+    chosen = extra_trees_selected(one)
+    assert set(chosen.numbers["val_r2"]) == {"resmlp", "random_forest", "extra_trees"}
+    pattern = uncertainty_pattern(one)
+    assert set(pattern.numbers) >= {"boundary / centre", "high / intermediate pressure"}
+    assert "depth not judged" in pattern.value
 
 
 @pytest.mark.slow
