@@ -359,6 +359,9 @@ def main(argv=None) -> int:
     except InputError as error:
         print(f"error: {error}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt:  # before a stream opened (a socket waiting for its connection): nothing written
+        print("interrupted", file=sys.stderr)
+        return 130
     print(f"wrote {len(result)} rows{note} to {output}")
     return 0
 

@@ -3,10 +3,9 @@ model), per hop of a sliding window (a recordings model), or per frame (the cont
 
 Each takes parsed lines (number, time_s or None, readings) and returns output rows (number,
 time_s, values or a reason the line's prediction is refused); the model's own time per call goes
-to `model_time` (export/live/summary.py). Values are the columns a batch predict.py writes
+to `model_time` (export/live/summary.py's ModelTime). Values are the columns a batch predict.py writes
 (export/onnx_predictor.py's Kind.columns), so a stream and a file give the same numbers.
 """
-import time
 from collections import deque
 
 import numpy as np
@@ -135,9 +134,7 @@ class TrackerStream:
                 if len(self.rest) == self.n_rest_frames:
                     self.tracker.fit(np.stack(self.rest))
                 continue
-            start = time.perf_counter()
-            contacts = self.tracker.update(frame)
-            model_time.add((time.perf_counter() - start) * 1e6)
+            contacts = model_time.call(self.tracker.update, frame)
             force = contacts.force_n
             if not np.isfinite(force).all():
                 out.append((number, stamp, "the force model's output is not finite"))
@@ -149,9 +146,7 @@ class TrackerStream:
 
 def _rows(predictor, lines, values, model_time) -> list:
     """One model call for the stacked inputs: an output row per line, or why it is refused."""
-    start = time.perf_counter()
-    raw = predictor.run_graph(values)
-    model_time.add((time.perf_counter() - start) * 1e6)
+    raw = model_time.call(predictor.run_graph, values)
     out = dict(zip(predictor.outputs, raw))
     finite = np.logical_and.reduce([np.isfinite(r).all(axis=1) for r in raw])
     arrays = predictor.reads.arrays(predictor, out)

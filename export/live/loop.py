@@ -28,7 +28,7 @@ def run_stream(source, kind, backlog, writer_args: tuple, on_bad_line: str = "sk
     parser, summary = LineFormat(kind.input_columns), Summary()
     output, fmt = writer_args
     writer = Writer(output, fmt, ["line", "time_s"] + kind.columns + ["latency_us"])
-    opened = time.perf_counter()
+    opened, cpu = time.perf_counter(), time.process_time()
     kept = False
     try:
         try:
@@ -38,6 +38,7 @@ def run_stream(source, kind, backlog, writer_args: tuple, on_bad_line: str = "sk
         kept = True
     finally:
         summary.seconds = time.perf_counter() - opened
+        summary.cpu_seconds = time.process_time() - cpu
         summary.dropped = source.dropped
         summary.waiting_for_window = summary.read - summary.skipped - summary.predicted
         writer.finish(keep=kept)

@@ -6,7 +6,7 @@ from tests.predict_support import WINDOW_STEPS, classification_model, regression
 
 from common.errors import InputError
 from export.live.kinds import TrackerStream, WindowStream
-from export.live.summary import LatencyHistogram
+from export.live.summary import ModelTime
 from export.onnx_predictor import OnnxPredictor
 
 
@@ -15,7 +15,7 @@ def test_the_ring_gives_the_sliding_windows_and_their_predictions(tmp_path, hop)
     predictor = OnnxPredictor(save(classification_model(), tmp_path / "cls.onnx"), threads=1)
     stream = WindowStream(predictor, hop)
     values = np.arange(2 * 23, dtype=float).reshape(23, 2)
-    rows = stream.predict([(k + 1, None, v) for k, v in enumerate(values)], LatencyHistogram())
+    rows = stream.predict([(k + 1, None, v) for k, v in enumerate(values)], ModelTime())
     starts = list(range(0, len(values) - WINDOW_STEPS + 1, hop))
     assert [row[2][0] for row in rows] == [s + 1 for s in starts]            # start_line
     windows = np.stack([values[s:s + WINDOW_STEPS].T for s in starts])
@@ -28,9 +28,9 @@ def test_a_gap_starts_the_window_again(tmp_path):
     predictor = OnnxPredictor(save(classification_model(), tmp_path / "cls.onnx"), threads=1)
     stream = WindowStream(predictor)
     lines = [(k + 1, None, np.array([k, k], dtype=float)) for k in range(WINDOW_STEPS - 1)]
-    assert stream.predict(lines, LatencyHistogram()) == []
+    assert stream.predict(lines, ModelTime()) == []
     stream.gap()
-    assert stream.predict(lines, LatencyHistogram()) == []
+    assert stream.predict(lines, ModelTime()) == []
 
 
 def test_rows_and_cols_need_the_force_model(tmp_path):

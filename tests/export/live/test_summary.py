@@ -29,3 +29,10 @@ def test_the_summary_line_counts_everything():
     text = summary.text()
     assert text.startswith("stream ended: 10 lines read, 8 predicted, 2 skipped (bad)") and "p50 30 µs" in text
     assert Summary().text().endswith("no latency (nothing predicted) in 0.0 s")
+
+
+def test_the_model_time_keeps_wall_and_cpu_time():
+    from export.live.summary import ModelTime
+    clock = ModelTime()
+    assert clock.call(sum, range(100_000)) == sum(range(100_000))
+    assert clock.n == 1 and clock.cpu_us > 0 and clock.total_us >= clock.cpu_us * 0.5
