@@ -35,25 +35,21 @@ factor keeps the choice reproducible). `most_accurate` keeps the highest held-ou
 ties to the cheaper). Either way `trade_` (metrics.json `choice.trade`, the log and the reason
 TensorBoard shows) says what the choice gave up against the most accurate candidate (the
 accuracy difference with its 95 % paired interval) and what it saved (latency and fit time of each).
-With `skip_unwinnable` (true: every class task; or a list of tasks), a costlier classifier is not
-fitted when it could not change the choice:
-when the one kept is wrong on e rows, a candidate right on all of them reaches z = sqrt(e) at most,
-so with sqrt(e) <= significance_z none can be significantly more accurate (`most_accurate`: when
-e = 0); each is named in `skipped_` with that reason.
-Successive halving for the candidates trained for epochs (`halving`, e.g. 3; null: off): before any
-net's full fit, every net still worth fitting is trained for 1/halving of its epochs and scored as
-its full fit would be, and only the best 1/halving of them go on (`rungs_`, `skipped_`).
+With `skip_unwinnable` (true: every class task; or a list of them), a costlier classifier is not
+fitted when it could not change the choice: against one wrong on e rows, a candidate right on all
+of them reaches z = sqrt(e) at most, so with sqrt(e) <= significance_z (`most_accurate`: e = 0) it is
+named in `skipped_` with that reason. `halving` (successive halving, e.g. 3; null: off): every net
+still worth fitting first trains for 1/halving of its epochs, only the best 1/halving go on (`rungs_`).
 
 What the candidates are scored on (`score_on`): `validation` (and `auto`, which a run may resolve to
-`training`), the validation rows given to `fit` (or carved from the training rows when none are); `training`, every candidate fitted on all the
-training rows and scored on its own held-out predictions of them (`out_of_fold_proba_`: the ROCKET
-family's exact leave-one-out, a net's out-of-fold predictions from the stratified folds that choose
-its epoch count), so that the winner is already trained on every row and no rows are spent on
-choosing (classes only). The run asks for it where the validation recordings would otherwise be
-carved from the training recordings a file declares (runs/classification.py): on ArrowHead's 36
-training recordings the validation carve left 28 to train on and 8 to choose with. Every candidate
-is scored on the same rows, paired, as above; `scored_on_` (and metrics.json `choice.scored_on`)
-says which rows, how many, and how each candidate held them out.
+`training`), the validation rows given to `fit` (or carved from the training rows when none are);
+`training`, every candidate fitted on all the training rows and scored on its own held-out
+predictions of them (`out_of_fold_proba_`: the ROCKET family's exact leave-one-out, a net's
+out-of-fold predictions from the stratified folds that choose its epoch count), so the winner is
+trained on every row and none are spent on choosing (classes only). The run asks for it where the
+validation recordings would otherwise be carved from the training recordings a file declares
+(runs/classification.py; on ArrowHead's 36 the carve left 28 to train on, 8 to choose with). All are
+scored on the same rows, paired; `scored_on_` (metrics.json `choice.scored_on`) says which, how many, how.
 
 `candidates` is either {name: estimator} or {task: {name: estimator}} with task one of TASKS;
 the second form (configs/model/auto.yaml) lets one config serve every kind of data, and `task`
@@ -278,16 +274,20 @@ class ValidationChoice(TouchstoneEstimator):
         if not self.models_:
             return None                                   # the cheapest always runs
         if self._skips_unwinnable():
-            kept = self._preferred(outputs, y_scored, quiet=True)
-            errors = int(np.sum(self.classes_[outputs[kept].argmax(axis=1)] != np.asarray(y_scored)))
+            kept, y_scored = self._preferred(outputs, y_scored, quiet=True), np.asarray(y_scored)
+            # held out of its own training rows, a row whose class has no other is never predicted right
+            classes, counts = np.unique(y_scored, return_counts=True)
+            winnable = ~np.isin(y_scored, classes[counts == 1]) if self.score_on == "training" else True
+            errors = int(np.sum((self.classes_[outputs[kept].argmax(axis=1)] != y_scored) & winnable))
             reachable = best_reachable_z(errors)
             if self.prefer == "most_accurate" and errors == 0:
-                return f"{kept} is right on every held-out {self.unit_[:-1]}: no candidate can be more accurate"
+                return f"{kept} is right on every held-out {self.unit_[:-1]} any candidate could get right"
             if self.prefer == "cheapest_within_noise" and reachable <= self.significance_z:
-                return (f"{kept} is wrong on {errors} of {len(y_scored)} scored {self.unit_}: a candidate right on "
-                        f"all of them would reach McNemar z = {reachable:.2f} <= {self.significance_z:g}, so none "
-                        "can be significantly more accurate (model.prefer=most_accurate or "
-                        "model.skip_unwinnable=false fits it anyway)")
+                return (f"{kept} is wrong on {errors} of {len(y_scored)} scored {self.unit_} (of those a candidate "
+                        f"could get right: not the only one of its class held out): right on all of them, a candidate "
+                        f"would reach McNemar z = {reachable:.2f} <= {self.significance_z:g}, so none can be "
+                        "significantly more accurate (model.prefer=most_accurate or model.skip_unwinnable=false "
+                        "fits it anyway)")
         if self.budget_s is not None:
             estimate = cost * float(np.mean(spent_per_cost))
             if elapsed + estimate > self.budget_s:

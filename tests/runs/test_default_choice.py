@@ -171,3 +171,21 @@ def test_a_chosen_model_that_holds_out_itself_trains_on_every_declared_training_
         assert metrics["data"]["n_fit_recordings"] == 24 and "trained on every one" in metrics["data"]["validation"]
     else:
         assert "n_fit_recordings" not in metrics["data"]
+
+
+def test_one_training_recording_per_class_trains_with_leave_one_out_scoring(compose_config, tmp_path):
+    """Nothing can be carved for validation: the default scores on held-out training predictions
+    (no traceback), and fits nothing costlier, since no held-out prediction of a class's only
+    recording can be right."""
+    rng = np.random.default_rng(0)
+    t = np.arange(64) / 64
+    y = np.array([0, 1, 2, 0, 1, 2])
+    X = np.sin(2 * np.pi * (2 + 3 * y)[:, None] * t)[:, None, :] + 0.1 * rng.standard_normal((6, 1, 64))
+    np.savez(tmp_path / "rig.npz", X=X.astype(np.float32), y=np.array(["a", "b", "c"])[y],
+             split=np.array(["train"] * 3 + ["test"] * 3))
+    metrics = run(compose_config(["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "trainer.progress=false",
+                                  "cost.onnx_latency_calls=0"]), tmp_path / "run")
+    choice = metrics["choice"]
+    assert choice["chosen"] == "minirocket" and choice["scored_on"]["by"] == {"minirocket": "leave-one-out"}
+    assert "wrong on 0 of 3 scored recordings (of those a candidate could get right" in choice["skipped"]["prcnn"]
+    assert "leave-one-out" in metrics["data"]["validation"]
