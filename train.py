@@ -35,6 +35,8 @@ from common.progress import phase
 from common.run_status import config_hash, mark_failed, mark_finished, mark_running, prepare_folder
 from common.threads import apply_threads, resolve_threads
 from runs.config_checks import check_config
+from runs.help_page import help_page
+from runs.setting_hints import misspelt_setting
 
 # torch, scikit-learn and onnx are imported in main(), after the config has been checked (a typo
 # is reported in about a second) and the thread setting applied (pools start at the right size).
@@ -170,6 +172,9 @@ def preflight(argv: list[str]) -> dict | None:
     (--help, --cfg, ...) run nothing. Returns the run and sweep folders as composed (None for
     those flags)."""
     flags = {arg for arg in argv if arg.startswith("-")}
+    if flags & {"--help", "-h"}:
+        print(help_page(ROOT / "configs", composed([a for a in argv if not a.startswith("-")])))
+        sys.exit(0)
     if flags - {"-m", "--multirun"}:
         return None
     try:
@@ -191,8 +196,18 @@ def preflight(argv: list[str]) -> dict | None:
         if flags:
             return None  # a sweep: Hydra reports its own errors before it makes a folder
         message = " ".join(str(error).split("Config search path")[0].split())
-        print(f"error: {message}", file=sys.stderr)
+        hint = misspelt_setting(message, lambda key: composed([a for a in argv if not a.startswith("-")
+                                                                and a.split("=", 1)[0].lstrip("+~") != key]))
+        print(f"error: {hint or message}", file=sys.stderr)
         sys.exit(2)
+
+
+def composed(arguments: list[str]) -> DictConfig:
+    """The command's configuration as Hydra would compose it, a sweep's axes left out (the help
+    page's values; the keys a misspelt setting could have meant)."""
+    overrides = [o.input_line for o in OverridesParser.create().parse_overrides(arguments) if not o.is_sweep_override()]
+    with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
+        return compose(config_name="config", return_hydra_config=True, overrides=overrides)
 
 
 FOLDER_SETTINGS = ("hydra.run.dir", "hydra.sweep.dir")
@@ -228,7 +243,9 @@ def hydra_quoted(value: str) -> str:
 
 
 if __name__ == "__main__":
-    if launched_world_size() > 1:
+    if "--help-all" in sys.argv:   # Hydra's own page: every group and the whole config
+        sys.argv = [a if a != "--help-all" else "--help" for a in sys.argv]
+    elif launched_world_size() > 1:
         sys.argv[1:] = agree_on_run_folder(sys.argv[1:])
     else:
         preflight(sys.argv[1:])

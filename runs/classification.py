@@ -35,8 +35,10 @@ from models.validation_choice import task_of
 from runs.report.classification_report import write_classification_report
 from runs.regression import check_deployable
 from runs.report.metrics import classification_metrics
+from runs.split_notes import split_note
 
 log = logging.getLogger(__name__)
+SIGNIFICANCE_Z = 1.96      # held-out loss increase (paired z) above which temperature scaling is not applied
 MIN_CALIBRATION_ROWS = 20   # fewer: a temperature fitted on them is noise; probabilities stay as the classifier gives them
 
 
@@ -54,6 +56,7 @@ class ClassificationResult:
     test_levels: np.ndarray | None
     pipeline: object        # models/deployable.py: TimeSeriesPipeline or TableClassifierPipeline
     hparams: dict
+    samples: str = "windows"   # what one scored sample is: a table's row or a recording's window
 
 
 def checkpoint_folder(output_dir) -> Path:
@@ -93,12 +96,52 @@ def _calibrate(model, datamodule) -> dict:
         return {"method": None, "rows": int(rows.size), "note": note}
     X_test, y_test = datamodule.test
     before = classification_metrics(y_test, model.predict_proba(X_test), datamodule.classes)["loss"]
+    held_out = cross_fitted_losses(model, *datamodule.calibration, datamodule.classes, datamodule.seed)
     model.calibrate(*datamodule.calibration)
+    kept = held_out["z"] <= SIGNIFICANCE_Z
+    if not kept:   # chosen on the calibration rows, never on test: the classifier's own probabilities win
+        model.temperature_beta_ = 1.0
     after = classification_metrics(y_test, model.predict_proba(X_test), datamodule.classes)["loss"]
-    log.info("class probabilities calibrated on %d held-out rows (temperature scaling, beta %.3f): test log loss "
-             "%.4f -> %.4f", rows.size, model.temperature_beta_, before, after)
-    return {"method": "temperature", "rows": int(rows.size), "temperature_beta": model.temperature_beta_,
-            "test_loss_uncalibrated": before, "test_loss": after}
+    report = {"method": "temperature" if kept else None, "rows": int(rows.size),
+              "temperature_beta": model.temperature_beta_, "held_out_loss": held_out,
+              "test_loss_uncalibrated": before, "test_loss": after}
+    choice = (f"held-out log loss on the {rows.size} calibration rows (each half's temperature judged on the other) "
+              f"{held_out['uncalibrated']:.4f} uncalibrated, {held_out['calibrated']:.4f} calibrated, paired z "
+              f"{held_out['z']:.2f}")
+    if not kept:
+        report["note"] = f"temperature scaling not applied: it raised the {choice} > {SIGNIFICANCE_Z}"
+        log.warning(report["note"])
+        return report
+    log.info("class probabilities calibrated on %d held-out rows (temperature scaling, beta %.3f; %s): test log loss "
+             "%.4f -> %.4f", rows.size, model.temperature_beta_, choice, before, after)
+    if after > before:   # reported, not acted on: test is never chosen on
+        report["note"] = (f"temperature scaling made the test log loss worse ({before:.4f} -> {after:.4f}); kept "
+                          f"because it was chosen on the calibration rows ({choice})")
+        log.warning(report["note"])
+    return report
+
+
+def cross_fitted_losses(model, X_cal, y_cal, classes, seed) -> dict:
+    """The log loss of the calibration rows with and without temperature scaling, each half's
+    temperature fitted on the other half: the held-out criterion that decides whether scaling
+    is kept. `z`: the paired per-row loss increase scaling brings, over its standard error; as
+    with a costlier candidate (models/validation_choice.py), the documented default (scaled)
+    gives way only to a significant difference, not to one within noise. Leaves the model
+    calibrated on the last half (the caller calibrates it on all)."""
+    y_cal = np.asarray(y_cal)
+    halves = np.array_split(np.random.default_rng(seed).permutation(len(y_cal)), 2)
+    uncalibrated = model.predict_proba(X_cal)
+    scaled = np.empty_like(uncalibrated)
+    for fit_rows, judged in ((halves[0], halves[1]), (halves[1], halves[0])):
+        model.calibrate(X_cal[fit_rows], y_cal[fit_rows])
+        scaled[judged] = model.predict_proba(X_cal[judged])
+    loss = {name: classification_metrics(y_cal, proba, classes)["loss"]
+            for name, proba in (("uncalibrated", uncalibrated), ("calibrated", scaled))}
+    rows = np.arange(len(y_cal))
+    increase = np.log(np.clip(uncalibrated[rows, y_cal], 1e-12, 1)) - np.log(np.clip(scaled[rows, y_cal], 1e-12, 1))
+    spread = increase.std(ddof=1) / np.sqrt(len(increase)) if len(increase) > 1 else 0.0
+    loss["z"] = float(increase.mean() / spread) if spread > 0 else 0.0
+    return loss
 
 
 def _table_ids(datamodule, rows) -> dict:
@@ -128,12 +171,10 @@ def _validation_can_join_training(datamodule) -> bool:
 
 def _scores_on_training(choice, datamodule) -> bool:
     """Whether the default model trains its candidates on every training recording and scores them on
-    their held-out predictions (model.score_on=auto: where validation can join training, or where
-    there is none: every class has one training recording, so nothing could be carved)."""
+    their held-out predictions (model.score_on=auto: where validation can join training)."""
     if choice.score_on != "auto":
         return choice.score_on == "training"
-    every_window_a_recording = len(datamodule.train_window_recording) == len(datamodule.y_train)
-    return _validation_can_join_training(datamodule) or (len(datamodule.y_val) == 0 and every_window_a_recording)
+    return _validation_can_join_training(datamodule)
 
 
 class Side:
@@ -141,6 +182,7 @@ class Side:
     task = None
 
     def __init__(self, datamodule):
+    samples = "windows"
         self.datamodule = datamodule
 
 
@@ -150,6 +192,7 @@ class Rows(Side):
     task = "classification"
 
     def model(self, cfg):
+    samples = "rows"
         return table_classifier(cfg)
 
     def pools_validation(self, model) -> bool:
@@ -202,6 +245,7 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
     summary = datamodule.summary()
     side = SIDES[task_of(X_train, y_train)](datamodule)   # the data's shape says: rows of a table, or windows
     model = side.model(cfg)
+    summary["split_note"] = split_note(summary, cfg.data.get("group_columns"))   # a table's own grouping
     choice = model if capabilities(model).chooses else None   # model=auto: chosen on validation
     # The rows the model is fitted on; with the choice scored on held-out training predictions, the
     # carved validation recordings join them (each candidate then holds rows out itself).
@@ -286,7 +330,7 @@ def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> C
     pipeline, val_ids, test_ids, more_hparams = side.evaluated(model, summary, val_recordings)
     hparams = {"model": name, "label": datamodule.label, "seed": cfg.seed, **more_hparams}
     return ClassificationResult(metrics, list(datamodule.classes), y_val, proba, val_ids, val_levels, y_test,
-                                proba_test, test_ids, test_levels, pipeline, hparams)
+                                proba_test, test_ids, test_levels, pipeline, hparams, samples=side.samples)
 
 
 def _say_choosing_and_fitting(choice, fit_time_s: float) -> None:

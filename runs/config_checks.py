@@ -23,6 +23,7 @@ import ast
 import math
 import re
 from dataclasses import dataclass
+from pathlib import Path
 
 from omegaconf import DictConfig, OmegaConf
 from omegaconf.errors import InterpolationResolutionError
@@ -323,6 +324,17 @@ def check_path_key(cfg: DictConfig) -> None:
                          f"(data.path={value})")
 
 
+def check_data_path(cfg: DictConfig) -> None:
+    """data.path names a file that exists: said before torch is imported and before Hydra makes a
+    run folder (the readers say the same, later, for a file that went away in between)."""
+    data = OmegaConf.select(cfg, "data", default=None)
+    if not isinstance(data, DictConfig) or "path" not in data or OmegaConf.is_missing(data, "path"):
+        return
+    path = data.path
+    if isinstance(path, str) and path and not Path(path).is_file():
+        raise InputError(f"{path}: no such file (data.path)")
+
+
 TIME_SERIES_DATA = ("data.datamodules.timeseries.TimeSeriesDataModule",
                     "data.datamodules.recording_files.from_recordings_file")
 TABLE_ONLY_MODEL = "models.weighted_blend.ValidationWeightedBlend"
@@ -346,6 +358,7 @@ def check_config(cfg: DictConfig, overrides=()) -> list[str]:
     `overrides` reach nothing in this run (an empty list otherwise)."""
     run_config = OmegaConf.masked_copy(cfg, [key for key in cfg if key != "hydra"])
     check_path_key(run_config)
+    check_data_path(run_config)
     check_model_fits_data(run_config)
     try:
         missing = sorted(OmegaConf.missing_keys(run_config))

@@ -21,14 +21,15 @@ FIGURE_NAMES = {"val": "confusion", "test": "confusion_test"}  # confusion.png: 
 
 def _split_frame(classes, split, ids, y_true, proba, levels) -> pd.DataFrame:
     """One row per window or table row: what it is (`ids`: its recording, or a table row's raw
-    readings), true and predicted class names and one probability column per class (`p_<class>`),
-    so a user can rank, threshold or calibrate without re-running."""
-    frame = pd.DataFrame({"split": split, **ids, "true": classes[y_true],
-                          "predicted": classes[proba.argmax(axis=1)]})
-    if levels is not None:
-        frame["force_level_n"] = levels
+    readings), then the columns predict.py writes, in its order (the predicted class, one
+    probability per class, `p_<class>`), so the two files compare column by column, then the
+    true class (and force level), so a user can rank, threshold or calibrate without re-running."""
+    frame = pd.DataFrame({"split": split, **ids, "predicted": classes[proba.argmax(axis=1)]})
     for k, name in enumerate(classes):
         frame[f"p_{name}"] = proba[:, k]
+    frame["true"] = classes[y_true]
+    if levels is not None:
+        frame["force_level_n"] = levels
     return frame
 
 
@@ -39,7 +40,8 @@ def write_classification_report(result, output_dir, logger) -> None:
     for split in ("val", "test"):
         scores = metrics[split]
         figures[FIGURE_NAMES[split]] = plots.confusion_figure(np.asarray(scores["confusion_matrix"]), result.classes,
-                                                f"{metrics['model']}: {SPLIT_NAMES[split]} accuracy {scores['accuracy']:.3f}")
+                                                f"{metrics['model']}: {SPLIT_NAMES[split]} accuracy {scores['accuracy']:.3f}",
+                                                samples=result.samples)
         for name in ("accuracy", "macro_f1", "loss"):
             logger.writer_.add_scalar(f"final/{split}_{name}", scores[name])
     logger.writer_.add_scalar("cost/fit_time_s", metrics["fit_time_s"])

@@ -8,8 +8,11 @@ R^2 = 1 - SS_res / SS_tot, as scikit-learn: a constant target (SS_tot = 0) score
 predicted exactly, else 0.0. Where SS_tot is so small that the ratio overflows (targets spread
 over 1e-157, say) R^2 is floored at -1e12 instead of -inf. It is undefined for a single sample
 and reported as None (null in metrics.json); the average skips it.
-MAPE is in percent, with |y| floored at 1e-8 of the target's largest magnitude (or 1e-12)
-so a zero in the targets gives a large but finite figure, never a division by zero.
+MAPE is in percent over the rows whose true value is not zero: a target within rounding of
+zero (|y| <= 1e-6 of the target's largest magnitude) has no percentage error, and dividing by it
+printed 8.67e+06 % for a force that is sometimes 0 N. Where such rows exist, `mape_notes` says
+for which targets and how many rows MAPE leaves out (metrics.json `metric_notes`, a log warning);
+a target that is zero on every row has no MAPE (None).
 """
 import numpy as np
 from sklearn.metrics import confusion_matrix, f1_score, log_loss, mean_absolute_error, mean_squared_error
@@ -33,14 +36,37 @@ def r_squared(true: np.ndarray, pred: np.ndarray) -> float | None:
     return float(max(1.0 - ratio, R2_FLOOR)) if np.isfinite(ratio) else R2_FLOOR
 
 
+ZERO_RELATIVE = 1e-6   # |y| at or below this share of the target's largest magnitude counts as zero
+
+
+def nonzero_rows(true: np.ndarray) -> np.ndarray:
+    """The rows a percentage error is defined on: true value not within rounding of zero."""
+    magnitude = np.abs(true)
+    return magnitude > ZERO_RELATIVE * float(np.max(magnitude, initial=0.0))
+
+
 def _scores(true: np.ndarray, pred: np.ndarray) -> dict:
-    floor = max(1e-8 * float(np.max(np.abs(true))), 1e-12)
+    kept = nonzero_rows(true)
     return {
         "r2": r_squared(true, pred),
         "rmse": float(np.sqrt(mean_squared_error(true, pred))),
         "mae": float(mean_absolute_error(true, pred)),
-        "mape_pct": float(100.0 * np.mean(np.abs(true - pred) / np.maximum(np.abs(true), floor))),
+        "mape_pct": float(100.0 * np.mean(np.abs(true[kept] - pred[kept]) / np.abs(true[kept]))) if kept.any()
+        else None,
     }
+
+
+def mape_notes(parts: dict, target_names: list[str]) -> list[str]:
+    """One line per split and target whose MAPE leaves rows out: {split: y_true} -> notes."""
+    notes = []
+    for split, y_true in parts.items():
+        y_true = np.asarray(y_true, dtype=np.float64).reshape(len(y_true), -1)
+        for k, name in enumerate(target_names):
+            zero = int((~nonzero_rows(y_true[:, k])).sum())
+            if zero:
+                notes.append(f"{split} {name}: {zero} of {len(y_true)} true values are zero; MAPE is over the other "
+                             f"{len(y_true) - zero} (a percentage of zero is not defined)")
+    return notes
 
 
 def regression_metrics(y_true, y_pred, target_names: list[str]) -> dict:

@@ -64,7 +64,12 @@ def readable_log_axis(ax, which: str = "x") -> None:
     axis.set_minor_formatter(NullFormatter())
 
 
-def parity_figure(y_true, y_pred, target_names, r2_by_target=None, split="test"):
+def model_prefix(model: str | None) -> str:
+    """'resmlp_seeds: ' in front of a figure's title, so a figure names the model it shows."""
+    return f"{model}: " if model else ""
+
+
+def parity_figure(y_true, y_pred, target_names, r2_by_target=None, split="test", model=None):
     """One panel per target: predictions against truth with the y = x line."""
     y_true, y_pred = np.asarray(y_true), np.asarray(y_pred)
     fig, axes = panel_grid(len(target_names))
@@ -76,12 +81,12 @@ def parity_figure(y_true, y_pred, target_names, r2_by_target=None, split="test")
         words = quantity_words(name)
         ax.set(title=words if r2_by_target is None else f"{words}: R² = {r2_by_target[name]:.3f}",
                xlabel=quantity_label(name, "true"), ylabel=quantity_label(name, "predicted"))
-    fig.suptitle(f"Predicted against true on the {split} split")
+    fig.suptitle(f"{model_prefix(model)}predicted against true on the {split} split")
     fig.tight_layout()
     return fig
 
 
-def residual_figure(y_true, y_pred, target_names, split="test"):
+def residual_figure(y_true, y_pred, target_names, split="test", model=None):
     """Histogram of residuals (predicted - true) per target."""
     residual = np.asarray(y_pred) - np.asarray(y_true)
     fig, axes = panel_grid(len(target_names), panel_height=3.0)
@@ -90,12 +95,12 @@ def residual_figure(y_true, y_pred, target_names, split="test"):
         ax.axvline(0, color="k", lw=0.8)
         ax.locator_params(axis="x", nbins=5)   # wide residuals (pascals) print long numbers
         ax.set(xlabel=quantity_label(name, "predicted − true"), ylabel=f"{split} rows (count)")
-    fig.suptitle(f"Residuals on the {split} split")
+    fig.suptitle(f"{model_prefix(model)}residuals on the {split} split")
     fig.tight_layout()
     return fig
 
 
-def uncertainty_figure(y_true, mean, lower, upper, target_names, split="test"):
+def uncertainty_figure(y_true, mean, lower, upper, target_names, split="test", model=None):
     """Predictions with their calibrated 95 % intervals against the true value."""
     y_true = np.asarray(y_true)
     fig, axes = panel_grid(len(target_names))
@@ -109,10 +114,18 @@ def uncertainty_figure(y_true, mean, lower, upper, target_names, split="test"):
         ax.plot([low, high], [low, high], color="0.5", lw=1)
         ax.set(title=f"{quantity_words(name)}: {100 * inside.mean():.0f} % inside",
                xlabel=quantity_label(name, "true"), ylabel=quantity_label(name, "predicted"))
-    fig.suptitle(f"Predictions with calibrated 95 % intervals on the {split} split\n"
+        readable_linear_ticks(ax)
+    fig.suptitle(f"{model_prefix(model)}predictions with calibrated 95 % intervals on the {split} split\n"
                  "(share of true values inside their interval in each title)")
     fig.tight_layout()
     return fig
+
+
+def readable_linear_ticks(ax, most: int = 5) -> None:
+    """At most `most` ticks per linear axis, large or small numbers as a power of ten at the axis'
+    end: a pressure panel's six-digit pascals collided on a 3.4-inch panel. Call after drawing."""
+    ax.locator_params(axis="both", nbins=most)
+    ax.ticklabel_format(axis="both", style="sci", scilimits=(-3, 4), useMathText=True)
 
 
 def importance_figure(names, importances, title, top=20):
@@ -161,8 +174,9 @@ def identifiability_figure(identifiability):
     return fig
 
 
-def confusion_figure(matrix, classes, title):
-    """Row-normalised confusion matrix with counts in the cells."""
+def confusion_figure(matrix, classes, title, samples="windows"):
+    """Row-normalised confusion matrix with counts in the cells; `samples` names what was counted
+    (a table's rows, a recording's windows)."""
     matrix = np.asarray(matrix, dtype=float)
     share = matrix / np.maximum(matrix.sum(axis=1, keepdims=True), 1)
     size = 0.45 * len(classes) + 2.5
@@ -176,7 +190,7 @@ def confusion_figure(matrix, classes, title):
                 if matrix[i, j]:
                     ax.text(j, i, int(matrix[i, j]), ha="center", va="center", fontsize=6,
                             color="white" if share[i, j] > 0.5 else "black")
-    fig.colorbar(image, ax=ax, shrink=0.8, label="share of the true class's windows (–)")
+    fig.colorbar(image, ax=ax, shrink=0.8, label=f"share of the true class's {samples} (–)")
     ax.set(xlabel="predicted class", ylabel="true class", title=title)
     fig.tight_layout()
     return fig

@@ -12,6 +12,7 @@ import pandas as pd
 from common.atomic import atomic_write
 from models.capabilities import capabilities
 from models.deployable import PIPELINE_FILE, save_pipeline
+from runs.model_naming import fit_time_words
 from runs.report import plots
 from runs.report.analysis import format_ablation
 from runs.report.figure_files import write_figures
@@ -22,15 +23,17 @@ log = logging.getLogger(__name__)
 
 def regression_figures(result, feature_names) -> dict:
     targets, y, pred = result.targets, result.y_test, result.pred_test
-    figures = {"parity": plots.parity_figure(y, pred, targets, {t: result.metrics["test"][t]["r2"] for t in targets}),
-               "residuals": plots.residual_figure(y, pred, targets)}
+    model = result.metrics["model"]
+    figures = {"parity": plots.parity_figure(y, pred, targets, {t: result.metrics["test"][t]["r2"] for t in targets},
+                                             model=model),
+               "residuals": plots.residual_figure(y, pred, targets, model=model)}
     if result.interval is not None:
-        figures["uncertainty"] = plots.uncertainty_figure(y, *result.interval, targets)
+        figures["uncertainty"] = plots.uncertainty_figure(y, *result.interval, targets, model=model)
     if "identifiability" in result.metrics:
         figures["identifiability"] = plots.identifiability_figure(result.metrics["identifiability"])
     if result.importances is not None:
-        name, values = result.importances
-        figures["importances"] = plots.importance_figure(feature_names, values, f"feature importances: {name} (top 20)")
+        title, values = result.importances
+        figures["importances"] = plots.importance_figure(feature_names, values, title)
         figures["correlation"] = plots.correlation_figure(*result.correlation)
     return figures
 
@@ -60,13 +63,16 @@ def _log_to_tensorboard(logger, result, figures) -> None:
 
 def _predictions_frame(result) -> pd.DataFrame:
     """One row per test press: the raw readings the deployed model takes (so the file is a
-    ready input for predict.py), then each target's prediction under the same column names that
-    predict.py writes (x_mm, x_mm_lower95, x_mm_upper95), then the truth (true_x_mm)."""
+    ready input for predict.py), then the prediction columns predict.py writes, with its names
+    and in its order (every target, then each target's _lower95 and _upper95:
+    export/onnx_predictor.py), so the two files compare column by column, then the truth
+    (true_x_mm)."""
     targets, pipeline = result.targets, result.pipeline
     frame = pd.DataFrame(pipeline.examples, columns=pipeline.channel_names)
     frame.insert(0, "row", result.test_rows)
     for k, t in enumerate(targets):
         frame[t] = result.pred_test[:, k]
+    for k, t in enumerate(targets):
         if result.interval is not None:
             frame[f"{t}_lower95"], frame[f"{t}_upper95"] = result.interval[1][:, k], result.interval[2][:, k]
     for k, t in enumerate(targets):
@@ -75,7 +81,11 @@ def _predictions_frame(result) -> pd.DataFrame:
 
 
 def _log_summary(metrics, output_dir) -> None:
-    log.info("%s fitted in %.2f s\n%s", metrics["model"], metrics["fit_time_s"], format_table(metrics))
+    log.info("%s\n%s", fit_time_words(metrics), format_table(metrics))
+    for note in metrics.get("metric_notes", {}).get("mape_pct", []):
+        log.warning("MAPE: %s", note)
+    if "importances_note" in metrics:
+        log.info(metrics["importances_note"])
     if "choice" in metrics:
         log.info("model choice: %s", metrics["choice"]["reason"])
     if "test" in metrics.get("spread", {}):
@@ -90,7 +100,10 @@ def _log_summary(metrics, output_dir) -> None:
     if "uncertainty" in metrics:
         u = metrics["uncertainty"]
         log.info("95 %% interval coverage on test, raw -> calibrated: %s",
-                 {t: f"{u['coverage_raw'][t]:.3f} -> {u['coverage_calibrated'][t]:.3f}" for t in u["coverage_raw"]})
+                 {t: f"{u['coverage_raw'][t]:.3f} -> {u['coverage_calibrated'][t]:.3f}"
+                  + (" (below target)" if u["coverage_calibrated"][t] < u["nominal"] else "") for t in u["coverage_raw"]})
+        for warning in u.get("warnings", []):
+            log.warning("interval coverage: %s", warning)
         log.info("Spearman(sigma, |error|): %s", {t: round(v, 3) for t, v in u["spearman_sigma_vs_abs_error"].items()})
     if "ablation" in metrics:
         log.info("feature-group ablation (%s), change in test R2:\n%s", metrics["ablation"]["model"],

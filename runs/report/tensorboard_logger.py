@@ -108,7 +108,8 @@ class TensorBoardLogger:
     def log_metrics(self, metrics: dict, prefix: str) -> None:
         for target, row in metrics.items():
             for name, value in row.items():
-                self.writer_.add_scalar(f"{prefix}/{target}/{name}", value)
+                if value is not None:   # not defined (R² of one row, MAPE of all-zero targets): no point
+                    self.writer_.add_scalar(f"{prefix}/{target}/{name}", value)
 
     def log_hparams(self, hparams: dict, final: dict) -> None:
         """The run's hyper-parameters (flattened) and its final scores, in the run's own event file."""

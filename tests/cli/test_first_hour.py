@@ -80,7 +80,7 @@ def test_a_key_the_target_does_not_take_is_named(compose_config):
     (["data.test_fraction=0.6", "data.val_fraction=0.5"], "must be below 1 (training needs rows), got 1.25"),
     (["data.val_fraction=-0.1"], "error: data.val_fraction must lie in (0, 1), got -0.1"),
     (["threads=0"], "error: threads must be a positive integer or 'all', got 0"),
-    (["scen=1"], "error: Could not override 'scen'"),
+    (["scen=1"], "error: scen is not a setting; did you mean scene?"),
 ])
 def test_config_mistakes_are_one_line_exit_2_and_no_run_folder(tmp_path, overrides, message):
     result = train(*overrides, f"hydra.run.dir={tmp_path / 'run'}", cwd=tmp_path)

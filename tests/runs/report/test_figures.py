@@ -167,3 +167,55 @@ def test_panel_grid_never_makes_a_strip(n, columns):
                                            ("quality", "quality"), ("r_01_ohm", "r 01 (Ω)")])
 def test_a_column_name_becomes_its_quantity_and_unit(column, label):
     assert plots.quantity_label(column) == label
+
+
+# -- a figure says what it shows (issue 45) ---------------------------------------------------
+
+SHEET = ["x_mm", "y_mm", "depth_mm", "pressure_pa"]
+
+
+def _sheet_predictions(seed=0):
+    """Test rows of the default run's size and ranges: pressures up to 240 kPa in pascals."""
+    rng = np.random.default_rng(seed)
+    y = np.column_stack([rng.choice([12.5, 25, 37.5], 70), rng.choice([12.5, 25, 37.5], 70),
+                         rng.uniform(0.3, 3.0, 70), rng.uniform(2e3, 2.4e5, 70)])
+    mean = y + rng.normal(0, 1, y.shape) * [3, 3, 0.2, 1.5e4]
+    return y, mean, mean - [10, 10, 0.4, 3e4], mean + [10, 10, 0.4, 3e4]
+
+
+def _overlapping_ticks(figure) -> list[str]:
+    figure.canvas.draw()
+    renderer = figure.canvas.get_renderer()
+    found = []
+    for ax in figure.axes:
+        for axis in (ax.xaxis, ax.yaxis):
+            labels = [t for t in axis.get_ticklabels() if t.get_visible() and t.get_text()]
+            boxes = [t.get_window_extent(renderer) for t in labels]
+            found += [f"{ax.get_title()}: {labels[i].get_text()} / {labels[j].get_text()}"
+                      for i in range(len(boxes)) for j in range(i + 1, len(boxes)) if boxes[i].overlaps(boxes[j])]
+    return found
+
+
+def test_uncertainty_tick_labels_do_not_overlap_on_a_pressure_panel():
+    """The default run's pressure panel printed 50000 100000 150000 ... into each other."""
+    figure = plots.uncertainty_figure(*_sheet_predictions(), SHEET, model="resmlp_seeds")
+    assert _overlapping_ticks(figure) == []
+    assert_readable(figure, "uncertainty")
+
+
+def test_regression_figures_name_their_model():
+    y, mean, lower, upper = _sheet_predictions()
+    for figure in (plots.parity_figure(y, mean, SHEET, model="resmlp_seeds"),
+                   plots.residual_figure(y, mean, SHEET, model="resmlp_seeds"),
+                   plots.uncertainty_figure(y, mean, lower, upper, SHEET, model="resmlp_seeds")):
+        assert figure.get_suptitle().startswith("resmlp_seeds: "), figure.get_suptitle()
+        matplotlib.pyplot.close(figure)
+
+
+@pytest.mark.parametrize("samples", ["rows", "windows"])
+def test_the_confusion_colour_bar_counts_what_was_classified(samples):
+    figure = plots.confusion_figure(np.array([[5, 1], [0, 4]]), ["left", "right"], "test accuracy 0.9",
+                                    samples=samples)
+    (bar,) = [ax for ax in figure.axes if ax.get_label() == "<colorbar>"]
+    assert bar.get_ylabel() == f"share of the true class's {samples} (–)"
+    matplotlib.pyplot.close(figure)
