@@ -171,10 +171,12 @@ def _validation_can_join_training(datamodule) -> bool:
 
 def _scores_on_training(choice, datamodule) -> bool:
     """Whether the default model trains its candidates on every training recording and scores them on
-    their held-out predictions (model.score_on=auto: where validation can join training)."""
+    their held-out predictions (model.score_on=auto: where validation can join training, or where
+    there is none: every class has one training recording, so nothing could be carved)."""
     if choice.score_on != "auto":
         return choice.score_on == "training"
-    return _validation_can_join_training(datamodule)
+    every_window_a_recording = len(datamodule.train_window_recording) == len(datamodule.y_train)
+    return _validation_can_join_training(datamodule) or (len(datamodule.y_val) == 0 and every_window_a_recording)
 
 
 class Side:
