@@ -12,13 +12,17 @@ reported 95 % interval, 1.96 sd).
 
     .venv/bin/python bench/calibrate.py --quick        # N = 20 and 200, 3 draws, smaller sets
     .venv/bin/python bench/calibrate.py                # N = 10, 20, 50, 100, 200, 3 draws x 3 seeds
+    .venv/bin/python bench/calibrate.py --command-time --scenes rubber12   # the one command on 20 and 200 presses
 
-Records (results/calibrate.jsonl): `<scene>/N=<n>` with the test R² per method and run, and
-`<scene>/recovery` with each parameter's hidden value, fit, sd and whether it was inside.
+Records (results/calibrate.jsonl): `<scene>/N=<n>` with the test R² per method and run,
+`<scene>/recovery` with each parameter's hidden value, fit, sd and whether it was inside, and
+`command/<scene>/N=<n>` with the one command's wall time.
 """
 import argparse
 import os
+import subprocess
 import sys
+import tempfile
 import time
 from pathlib import Path
 
@@ -33,7 +37,8 @@ from hydra.utils import instantiate  # noqa: E402
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from common.result_records import recording  # noqa: E402
+from common.atomic import atomic_write  # noqa: E402
+from common.result_records import RESULTS, latest, read_records, recording  # noqa: E402
 from common.spread import format_mean_sd  # noqa: E402
 from data.calibration.identifiable import calibration_for  # noqa: E402
 from data.calibration.rig_standin import hidden_parameters, rig_presses  # noqa: E402
@@ -45,6 +50,7 @@ from runs.report.metrics import regression_metrics  # noqa: E402
 MEASURED_CODE = ["data/calibration/", "runs/calibration/pretraining.py", "configs/experiment/calibrate.yaml",
                  "data/scenes/", "models/trees.py", "data/preprocessing/features.py"]
 METHODS = (*CANDIDATES, "chosen")
+FIGURE = ROOT / "bench" / "figures" / "calibrate_learning_curves.png"
 Z95 = 1.96
 
 
@@ -90,6 +96,58 @@ def one_run(cfg, scene, pool, test, n: int, seed: int) -> tuple[dict, dict]:
     return scores, done
 
 
+def plot_learning_curves() -> Path:
+    """The newest learning-curve records, one panel per scene: test R² against N per method
+    (mean ± sd as error bars), written to FIGURE (docs/calibrate.md shows it)."""
+    import matplotlib
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    names = dict.fromkeys(r["name"] for r in read_records(RESULTS / "calibrate.jsonl") if "/N=" in r["name"])
+    records = [latest("calibrate", name) for name in names]
+    scenes = list(dict.fromkeys(name.split("/")[0] for name in names))
+    figure, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.4), squeeze=False)
+    for ax, scene in zip(axes[0], scenes):
+        mine = sorted((int(r["name"].split("=")[1]), r["values"]["test_mean_r2"]) for r in records
+                      if r["name"].startswith(scene + "/"))
+        sizes = [n for n, _ in mine]
+        for method in METHODS:
+            values = [np.asarray(v[method], dtype=float) for _, v in mine]
+            ax.errorbar(sizes, [x.mean() for x in values], yerr=[x.std(ddof=1) if len(x) > 1 else 0 for x in values],
+                        marker="o", capsize=3, label=method.replace("_", " "))
+        ax.set_xscale("log")
+        ax.set_xlabel("calibration presses N")
+        ax.set_ylabel("test R² (mean over targets)")
+        ax.set_title(scene)
+    axes[0][0].legend(fontsize=7)
+    figure.tight_layout()
+    FIGURE.parent.mkdir(exist_ok=True)
+    atomic_write(FIGURE, lambda tmp: figure.savefig(tmp, dpi=90, format="png"))
+    plt.close(figure)
+    return FIGURE
+
+
+def command_times(scene_name: str, sizes, record) -> None:
+    """The one command's wall time on a stand-in rig's table of N presses (all its defaults)."""
+    base = instantiate(config(scene_name, 0, False).scene)
+    hidden = hidden_parameters(base, np.random.default_rng(999))
+    with tempfile.TemporaryDirectory() as folder:
+        for n in sizes:
+            path = Path(folder) / f"presses_{n}.csv"
+            rig_presses(base, hidden, 999, n).to_csv(path, index=False)
+            command = [sys.executable, "train.py", "experiment=calibrate", f"scene={scene_name}", "data=table",
+                       f"data.path={path}", f"hydra.run.dir={Path(folder) / f'run_{n}'}"]
+            start = time.perf_counter()
+            done = subprocess.run(command, cwd=ROOT, capture_output=True, text=True)
+            wall_s = time.perf_counter() - start
+            if done.returncode != 0:
+                raise SystemExit(f"the command failed on {n} presses: {done.stderr.strip().splitlines()[-1]}")
+            record.add(f"command/{scene_name}/N={n}", {"wall_s": [wall_s], "presses": n,
+                                                         "command": "python train.py experiment=calibrate "
+                                                                    f"scene={scene_name} data=table "
+                                                                    "data.path=<N presses>.csv"}, seeds=[0])
+            print(f"{scene_name}, {n} presses: the one command took {wall_s:.0f} s", flush=True)
+
+
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--scenes", nargs="+", default=["taxels", "capacitive6x6", "rubber12"])
@@ -99,7 +157,18 @@ def main():
     parser.add_argument("--n-test", type=int, default=200)
     parser.add_argument("--quick", action="store_true")
     parser.add_argument("--set", nargs="*", default=[], help="Hydra overrides, e.g. calibration.real_weight=0.2")
+    parser.add_argument("--command-time", action="store_true",
+                        help="time the one command (train.py experiment=calibrate) on N presses per scene instead")
+    parser.add_argument("--plot-only", action="store_true", help="redraw the figure from the newest records")
     args = parser.parse_args()
+    if args.command_time:
+        with recording("calibrate", MEASURED_CODE) as record:
+            for scene_name in args.scenes:
+                command_times(scene_name, args.n or [20, 200], record)
+        return
+    if args.plot_only:
+        print(f"wrote {plot_learning_curves().relative_to(ROOT)}")
+        return
     sizes = args.n or ([20, 200] if args.quick else [10, 20, 50, 100, 200])
     seeds_per_draw = args.seeds or (1 if args.quick else 3)
     with recording("calibrate", MEASURED_CODE) as record:
@@ -141,6 +210,7 @@ def main():
                 record.add(f"{scene_name}/recovery", {"pairs": recovery}, seeds=run_seeds)
                 inside = np.mean([r["inside_95"] for r in recovery])
                 print(f"{scene_name}: {inside:.0%} of (parameter, run) pairs inside the reported 95 % interval")
+    print(f"wrote {plot_learning_curves().relative_to(ROOT)}")
 
 
 if __name__ == "__main__":

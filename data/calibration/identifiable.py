@@ -72,7 +72,7 @@ CALIBRATIONS = {
             "tunneling.gap_nm, barrier_height_ev": "trade off against junction_loss_per_strain",
             "contact.film_modulus_pa": "moves the readings under the probe by < 1 % over its range",
             "gel_thickness_mm": "trades off against junction_loss_per_strain and the specimen's own thickness "
-                                "map (fitted together: 15-20 % off with a reported sd of 1-5 %, 2 rig draws)",
+                                "map (fitted together on stand-in rigs it landed far outside its own interval)",
             "probe_radius_mm, side_mm": "the rig's geometry: give them, they are not fitted",
         }),
     "taxels": SceneCalibration(
@@ -102,7 +102,7 @@ CALIBRATIONS = {
         unmodelled=("fabrication_spread", "drift", "interference", "baseline_noise", "quantisation"),
         not_identifiable={
             "spacer_youngs_modulus_pa": "trades off against counts_per_pf (change per newton is their ratio; "
-                                        "fitted together their sd was 5-20 x their value)",
+                                        "fitted together, each one's sd exceeded its value)",
             "spacer_permittivity, sensing_area_mm2, spacer_thickness_mm":
                 "only their product with counts_per_pf reaches a reading (C0 = eps A / d0)",
             "crosstalk couplings": "trade off against the cover's spread on neighbouring cells",

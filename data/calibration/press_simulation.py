@@ -76,7 +76,7 @@ def draw_labels(observed: pd.DataFrame, inputs, n: int, rng: np.random.Generator
     shares the rig's joint distribution of positions and loads (shear inside the friction cone,
     the depths the lab used) and still fills the gaps between the few calibration presses. When
     the table was pressed on a grid (the lab's nine points, the skin's cells) the positions are
-    the grid's, unmoved. A quantity observed only >= 0 (a depth, a normal force) stays >= 0."""
+    the grid's, unmoved. A quantity observed only >= 0 (a depth, a force) stays above half its smallest observed value."""
     inputs = list(inputs)
     values = observed[inputs].to_numpy(float)
     rows = rng.integers(0, len(values), n)
@@ -88,5 +88,7 @@ def draw_labels(observed: pd.DataFrame, inputs, n: int, rng: np.random.Generator
     if position and len(points) <= GRID_SHARE * len(observed):
         drawn[:, position] = values[rows][:, position]
     never_negative = values.min(axis=0) >= 0
-    drawn[:, never_negative] = np.abs(drawn[:, never_negative])   # reflected at 0
+    # reflected at 0, and no lighter than half the lightest observed (a scene's sensed force adds
+    # noise, which must not make a press of almost no force negative)
+    drawn[:, never_negative] = np.maximum(np.abs(drawn[:, never_negative]), 0.5 * values.min(axis=0)[never_negative])
     return pd.DataFrame(drawn, columns=inputs)
