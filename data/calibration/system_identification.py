@@ -178,18 +178,21 @@ def _standard_errors(jacobian: np.ndarray, residuals: np.ndarray, n_presses: int
 def _check_gains(scene: str, columns, measured, simulated) -> None:
     """Stop on a channel the scene cannot produce at any parameter in range: its least-squares
     gain against the fitted simulation (deviations from each column's mean) is far from 1 or
-    negative, the mark of a wrong unit or sign convention."""
+    negative by more than twice its own sd, or its level (a reading with an offset, as ohms) is
+    off by as much: the mark of a wrong unit or sign convention."""
     m, s = measured - measured.mean(axis=0), simulated - simulated.mean(axis=0)
     spread = np.sqrt(np.mean(s**2, axis=0))
     for k, column in enumerate(columns):
         if spread[k] < LIVE_CHANNEL * spread.max() or spread[k] == 0:
             continue
         gain = float(np.sum(m[:, k] * s[:, k]) / np.sum(s[:, k] ** 2))
-        checks = [(gain, "change")]
+        # the gain's own sd from the scatter about it: a few noisy presses must not stop a good rig
+        gain_sd = float(np.sqrt(np.sum((m[:, k] - gain * s[:, k]) ** 2) / max(len(m) - 1, 1) / np.sum(s[:, k] ** 2)))
+        checks = [(gain, gain_sd, "change")]
         if np.mean(np.abs(simulated[:, k])) > OFFSET_LEVEL * spread[k]:   # a reading with a level (ohms)
-            checks.append((float(np.mean(np.abs(measured[:, k])) / np.mean(np.abs(simulated[:, k]))), "level"))
-        for ratio, what in checks:
-            if not GAIN_RANGE[0] <= ratio <= GAIN_RANGE[1]:
+            checks.append((float(np.mean(np.abs(measured[:, k])) / np.mean(np.abs(simulated[:, k]))), 0.0, "level"))
+        for ratio, sd, what in checks:
+            if ratio + 2 * sd < GAIN_RANGE[0] or ratio - 2 * sd > GAIN_RANGE[1]:
                 raise InputError(f"calibration: channel '{column}' reads {ratio:.3g} x the {what} scene {scene} "
                                  f"simulates at its best-fitting parameters in range; check the channel's unit "
                                  f"and sign convention (or its mapping, calibration.channel_map)")
