@@ -38,7 +38,7 @@ def calibrated_config(cfg, fit) -> dict:
     return config
 
 
-def _report_text(fit, choice, fitted_scene) -> str:
+def _report_text(fit, choice) -> str:
     lines = [f"# Scene fit: {fit.scene}", "",
              f"{len(fit.measured)} training presses, {fit.n_evaluations} simulations, {fit.time_s:.1f} s; "
              f"optimiser: {fit.message}", "",
@@ -80,11 +80,11 @@ def measured_vs_simulated_figure(fit):
     return figure
 
 
-def write_fit_report(output_dir: Path, cfg, fit, fitted_scene, choice, logger=None) -> None:
+def write_fit_report(output_dir: Path, cfg, fit, choice, logger=None) -> None:
     config = calibrated_config(cfg, fit)
     header = (f"# Scene {fit.scene} fitted to {len(fit.measured)} calibration presses (fit_report.md beside it):\n"
               "#   python train.py hydra.searchpath=[file://<this run's folder>] scene=calibrated ...\n")
     (output_dir / SCENE_FILE).parent.mkdir(parents=True, exist_ok=True)
     atomic_write_text(output_dir / SCENE_FILE, header + yaml.safe_dump(config, sort_keys=False))
-    atomic_write_text(output_dir / "fit_report.md", _report_text(fit, choice, fitted_scene))
+    atomic_write_text(output_dir / "fit_report.md", _report_text(fit, choice))
     write_figures(output_dir, {"measured_vs_simulated": measured_vs_simulated_figure(fit)}, logger)

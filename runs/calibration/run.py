@@ -46,6 +46,6 @@ def run_calibration(cfg, output_dir: str | Path, datamodule, logger):
     }
     result = RegressionResult(metrics, targets, datamodule.test_idx, y_test, pred_test,
                               regression_pipeline(datamodule, model), hparams={"calibration.chosen": chosen})
-    write_fit_report(Path(output_dir), cfg, done["fit"], done["fitted_scene"], done["choice"], logger)
+    write_fit_report(Path(output_dir), cfg, done["fit"], done["choice"], logger)
     write_regression_report(result, Path(output_dir), logger, datamodule.feature_names)
     return metrics, result.pipeline
