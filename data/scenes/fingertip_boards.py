@@ -12,7 +12,8 @@ Materials (MATERIALS), each against the fingertip's Kapton (polyimide) skin:
   readily, far from polyimide, charge most); magnitudes in the spread of the quantified series of
   Zou et al., Nat. Commun. 10 (2019) 1427 (measured against liquid mercury, i.e. at full contact),
   which lists polymers only: marble, carbon fibre, bakelite, leather, silk, paper and wood are
-  estimates. Physics notes mark all of these "verify".
+  estimates. Physics notes mark all of these "verify". Issue 42 asked to size them from Zou et
+  al.'s table: blocked, the table could not be read here (docs/fingertip.md).
 - `static_friction`, `kinetic_friction` against polyimide film. Anchor: Kapton HN on itself,
   static 0.63, kinetic 0.48 (DuPont, *Kapton HN technical data sheet*, summary of properties);
   polymer-polymer and polymer-glass/stone pairs lie at 0.2-0.7 (Rabinowicz, *Friction and Wear of

@@ -368,6 +368,9 @@ FIELD_EFFECTS = {"specimen": specimen, "contact": contact, "gel_edges": gel_edge
                  "relaxation": relaxation, "hysteresis": hysteresis, "cycle_response": cycle_response,
                  "percolation": percolation,
                  "tunneling": tunneling}
+# Field effects that differ from one indentation cycle to the next: part of the repeat variation,
+# not of the noise-free response (runs/fidelity/rubber12.py leaves them out of its noise-free curves).
+PER_CYCLE_EFFECTS = ("cycle_response",)
 READING_EFFECTS = {"electrode_contact": electrode_contact, "temperature_drift": temperature_drift,
                    "adc": adc, "outlier_rejection": outlier_rejection, "load_cell": load_cell,
                    "minmax_normalize": minmax_normalize}

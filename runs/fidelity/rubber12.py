@@ -22,7 +22,7 @@ import numpy as np
 from common.spread import format_mean_sd
 from data.preprocessing.features import FEATURE_GROUPS, compute_features
 from data.scenes.rubber12 import Rubber12Scene
-from data.scenes.rubber12_effects import FIELD_EFFECTS
+from data.scenes.rubber12_effects import FIELD_EFFECTS, PER_CYCLE_EFFECTS
 from runs.fidelity.observations import SEEDS, Measured, judged_over_seeds, observation, probe, seeds_label
 from runs.fidelity.registered.rubber12 import REPEAT_CV_BOUND
 
@@ -56,8 +56,8 @@ class SceneProbe:
 
     @cached_property
     def field_effects(self) -> dict:
-        """The listed physics without acquisition noise: the noise-free response."""
-        return {k: v for k, v in self.params["effects"].items() if k in FIELD_EFFECTS}
+        """The listed physics without acquisition noise or per-cycle variation: the noise-free response."""
+        return {k: v for k, v in self.params["effects"].items() if k in FIELD_EFFECTS and k not in PER_CYCLE_EFFECTS}
 
     @cached_property
     def reading_effects_without_normalisation(self) -> dict:
