@@ -182,9 +182,9 @@ def _scores_on_training(choice, datamodule) -> bool:
 class Side:
     """What differs between the two kinds of classification data, decided once per run."""
     task = None
+    samples = "windows"
 
     def __init__(self, datamodule):
-    samples = "windows"
         self.datamodule = datamodule
 
 
@@ -192,9 +192,9 @@ class Rows(Side):
     """A classification table: one row per press (models/classic_classifiers.py or a library
     classifier), probabilities calibrated on the held-out rows."""
     task = "classification"
+    samples = "rows"
 
     def model(self, cfg):
-    samples = "rows"
         return table_classifier(cfg)
 
     def pools_validation(self, model) -> bool:
@@ -245,9 +245,9 @@ SIDES = {side.task: side for side in (Rows, Windows)}
 def fit_and_evaluate(cfg, datamodule, epoch_callback=None, output_dir=None) -> ClassificationResult:
     (X_train, y_train), (X_val, y_val), (X_test, y_test) = datamodule.train, datamodule.val, datamodule.test
     summary = datamodule.summary()
+    summary["split_note"] = split_note(summary, cfg.data.get("group_columns"))   # a table's own grouping
     side = SIDES[task_of(X_train, y_train)](datamodule)   # the data's shape says: rows of a table, or windows
     model = side.model(cfg)
-    summary["split_note"] = split_note(summary, cfg.data.get("group_columns"))   # a table's own grouping
     choice = model if capabilities(model).chooses else None   # model=auto: chosen on validation
     # The rows the model is fitted on; with the choice scored on held-out training predictions, the
     # carved validation recordings join them (each candidate then holds rows out itself).
