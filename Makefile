@@ -21,7 +21,7 @@ lock:                         ## re-resolve requirements-dev.txt (ranges) into r
 train: install                ## python train.py on the default simulated scene (make train ARGS="model=resmlp")
 	$(PY) train.py $(ARGS)
 
-test: install                 ## the default test suite on both cores (< 10 min on 2 cores)
+test: install                 ## the default test suite (not marked slow) on both cores; its time is not recorded yet
 	$(PY) -m pytest -q -m "not slow" -n 2 --durations=15
 
 test-slow: install            ## the slow tests only

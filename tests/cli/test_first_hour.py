@@ -142,14 +142,19 @@ def test_progress_off_a_terminal_is_one_line_per_loop(caplog, monkeypatch):
 
 # -- predictions.csv is a sample input for predict.py ----------------------------------------
 
+def predict_own_test_rows(run: Path, output: Path) -> None:
+    """predict.py on a run's own predictions.csv (a ready input: it holds the raw readings)."""
+    predicted = subprocess.run([sys.executable, str(ROOT / "predict.py"), f"model={run / 'model.onnx'}",
+                                f"input={run / 'predictions.csv'}", f"output={output}"],
+                               capture_output=True, text=True, cwd=output.parent, timeout=300)
+    assert predicted.returncode == 0, predicted.stderr
+
+
 def test_predictions_csv_feeds_predict_py_with_the_same_columns(tmp_path):
     run = tmp_path / "run"
     result = train(*tiny("extra_trees"), f"hydra.run.dir={run}", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    predicted = subprocess.run([sys.executable, str(ROOT / "predict.py"), f"model={run / 'model.onnx'}",
-                                f"input={run / 'predictions.csv'}", f"output={tmp_path / 'pred.csv'}"],
-                               capture_output=True, text=True, cwd=tmp_path, timeout=300)
-    assert predicted.returncode == 0, predicted.stderr
+    predict_own_test_rows(run, tmp_path / "pred.csv")
     ours, theirs = pd.read_csv(run / "predictions.csv"), pd.read_csv(tmp_path / "pred.csv")
     targets = ["x_mm", "y_mm", "depth_mm", "pressure_pa"]
     assert list(theirs.columns) == targets
@@ -167,3 +172,32 @@ def test_a_long_loop_off_a_terminal_says_how_far_it_is(caplog, monkeypatch):
     assert [line.split(" so far")[0] for line in lines[:3]] == ["epochs: 1/3 epochs", "epochs: 2/3 epochs",
                                                                "epochs: 3/3 epochs"]
     assert lines[3].startswith("epochs: 3 epochs in ")
+
+
+def _predicted_columns(frame: pd.DataFrame, channels: list[str]) -> list[str]:
+    """predictions.csv's columns after the row id and the channels, before the truth."""
+    return [c for c in frame.columns if c not in ("row", "split", *channels) and not c.startswith("true")]
+
+
+@pytest.mark.parametrize("kind", ["intervals", "classes"])
+def test_predictions_csv_has_exactly_predict_pys_columns_in_its_order(tmp_path, kind):
+    """README "What a run writes": the prediction columns of predictions.csv are predict.py's, by name
+    and order (before: each target's bounds followed it, where predict.py writes every target first)."""
+    run = tmp_path / "run"
+    if kind == "intervals":
+        overrides, channels = tiny("blend"), [f"r_{k:02d}_ohm" for k in range(1, 13)]
+    else:
+        rng = np.random.default_rng(0)
+        region = rng.integers(0, 3, 150)
+        channels = ["r_01_ohm", "r_02_ohm"]
+        pd.DataFrame({"r_01_ohm": 1000 + 200 * region + rng.normal(0, 50, 150), "r_02_ohm": rng.normal(900, 30, 150),
+                      "region": np.array(["left", "middle", "right"])[region]}).to_csv(tmp_path / "pads.csv", index=False)
+        overrides = ["data=table", f"data.path={tmp_path / 'pads.csv'}", "data.target_columns=[region]",
+                     "model=logistic_regression"]
+    result = train(*overrides, f"hydra.run.dir={run}", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    predict_own_test_rows(run, tmp_path / "pred.csv")
+    ours, theirs = pd.read_csv(run / "predictions.csv"), pd.read_csv(tmp_path / "pred.csv")
+    assert _predicted_columns(ours, channels) == list(theirs.columns)
+    if kind == "intervals":
+        assert list(theirs.columns)[4:6] == ["x_mm_lower95", "x_mm_upper95"]
