@@ -30,7 +30,6 @@ from omegaconf.errors import InterpolationResolutionError
 
 from common.errors import InputError
 from common.threads import resolve_threads
-from data.splits.settings import check_split_settings
 from runs.target_signatures import Parameter, module_constant, target_parameters, target_signature
 
 HYDRA_KEYS = {"_target_", "_convert_", "_partial_", "_recursive_", "_args_"}
@@ -237,6 +236,9 @@ def check_settings(config: dict) -> None:
             check_value(f"trainer.{key}", value, TRAINER.get(key) or _unknown("trainer", key))
     data = config.get("data") or {}
     if str(data.get("_target_", "")).startswith("data.datamodules.regression."):
+        # imported here: data/splits/ loads scikit-learn (seconds on a busy machine), which the
+        # checks before this one (a misspelt key, a missing file) need not wait for
+        from data.splits.settings import check_split_settings
         check_split_settings(data.get("n_folds"), data.get("test_fraction"), data.get("val_fraction"),
                              data.get("calibration_fraction"), data.get("split"))
 

@@ -54,14 +54,15 @@ def test_a_misspelt_setting_gets_the_closest_valid_one_not_the_append_hint(tmp_p
 
 
 def test_a_wrong_data_path_is_one_line_before_torch_with_no_run_folder(tmp_path):
-    """Before: reported after ~5 s of imports, leaving a failed run's folder."""
+    """Before: reported after the pre-flight had loaded scikit-learn (1.75 s CPU, 12 s wall at load 10),
+    and after ~5 s of imports when it was left to the data module, leaving a failed run's folder."""
     probe = ("import sys; sys.argv[0] = 'train.py'; import train\n"
              "try:\n    train.preflight(sys.argv[1:])\nexcept SystemExit as stop:\n"
-             "    print('exit', stop.code, 'torch' in sys.modules)\n")
+             "    print('exit', stop.code, 'torch' in sys.modules, 'sklearn' in sys.modules)\n")
     result = subprocess.run([sys.executable, "-c", probe, "data=table", f"data.path={tmp_path / 'rig.csv'}",
                              "data.target_columns=[force_n]", f"hydra.run.dir={tmp_path / 'run'}"],
                             capture_output=True, text=True, cwd=ROOT, timeout=300)
-    assert result.stdout.strip() == "exit 2 False"
+    assert result.stdout.strip() == "exit 2 False False"   # neither torch nor scikit-learn loaded
     assert result.stderr.strip() == f"error: {tmp_path / 'rig.csv'}: no such file (data.path)"
     assert not (tmp_path / "run").exists()
 
