@@ -264,8 +264,8 @@ def test_within_noise_the_cheapest_to_predict_is_kept_and_the_trade_is_said(pref
 
 
 def test_a_costlier_candidate_faster_to_predict_is_kept_within_noise_only_by_a_clear_margin():
-    X, y, X_val, y_val = labelled_by_both(40, 1, 1)
-    for slow_s, chosen in ((0.02, "quick_to_predict"), (0.0, "first")):
+    for wrong, slow_s, chosen in ((1, 0.02, "quick_to_predict"), (1, 0.0, "first"), (2, 0.02, "first")):
+        X, y, X_val, y_val = labelled_by_both(40, 1, wrong)    # the later one: as accurate, or less (never kept)
         choice = ValidationChoice({"first": SlowToPredict(0, sleep_s=slow_s), "quick_to_predict": SlowToPredict(1)},
                                   ensemble=False, relative_cost={"first": 1, "quick_to_predict": 10},
                                   skip_unwinnable=False)
