@@ -1,6 +1,7 @@
 """`python train.py --help`: one short page of the settings a user changes first, each with one
-line, generated from the configs (configs/hydra/help/first_settings.yaml names the keys and the
-file whose comment describes each); `--help-all` is Hydra's full dump.
+line, generated from the configs (runs/help_page.yaml names the keys and the config file whose
+comment describes each; it is no Hydra config, so it lives beside this code, not in configs/);
+`--help-all` is Hydra's full dump.
 
 A description is the comment beside the key in its config file (continuation comment lines
 joined), so the page cannot drift from the configs; a group lists its options from the files
@@ -12,7 +13,7 @@ from pathlib import Path
 
 from omegaconf import OmegaConf
 
-HELP_FILE = Path("hydra") / "help" / "first_settings.yaml"
+HELP_FILE = Path(__file__).with_suffix(".yaml")
 WIDTH = 100
 KEY_COLUMN = 24
 LONGEST = 110       # a longer comment is cut at its first clause: the page is one line per setting
@@ -74,7 +75,7 @@ def entry_lines(name: str, value: str, description: str) -> list[str]:
 
 def help_page(config_dir: Path, cfg) -> str:
     """The page for the composed config `cfg` (composed with return_hydra_config=True)."""
-    spec = OmegaConf.load(config_dir / HELP_FILE)
+    spec = OmegaConf.load(HELP_FILE)
     choices = OmegaConf.select(cfg, "hydra.runtime.choices", default={}) or {}
     lines = [spec.title, ""]
     for section, entries in spec.sections.items():
