@@ -39,6 +39,19 @@ def test_a_default_run_names_the_chosen_model_its_members_and_its_splits_one_way
     assert f"scores over 2 splits: this run's and 1 more ({chosen} refitted on each)" in log
     assert "refits on the other splits: 1 splits" in log
     assert written["data"]["split_note"].startswith("every repeat of a position-depth pair")   # a scene's own words
+    assert tensorboard_hparams(tmp_path)["model"] == chosen        # was "ValidationChoice"
+
+
+def tensorboard_hparams(run_dir) -> dict:
+    """The string hyper-parameters of the run's TensorBoard session (its HPARAMS tab)."""
+    from tensorboard.backend.event_processing.event_accumulator import EventAccumulator
+    from tensorboard.plugins.hparams import metadata
+    for folder in sorted({p.parent for p in run_dir.glob("tensorboard/**/events.out.tfevents.*")}):
+        content = EventAccumulator(str(folder)).Reload().PluginTagToContent(metadata.PLUGIN_NAME)
+        if metadata.SESSION_START_INFO_TAG in content:
+            start = metadata.parse_session_start_info_plugin_data(content[metadata.SESSION_START_INFO_TAG])
+            return {name: value.string_value for name, value in start.hparams.items()}
+    raise AssertionError("no TensorBoard session with hyper-parameters")
 
 
 def test_a_users_table_gets_its_own_split_note():
