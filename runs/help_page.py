@@ -17,7 +17,7 @@ HELP_FILE = Path(__file__).with_suffix(".yaml")
 WIDTH = 100
 KEY_COLUMN = 24
 LONGEST = 110       # a longer comment is cut at its first clause: the page is one line per setting
-MOST_OPTIONS = 10
+MOST_OPTIONS = 24
 FULL = ("Every setting: python train.py --help-all (Hydra's full config); explained in docs/configuration.md.\n"
         "Mistakes are one line and exit code 2 (a misspelt key gets the closest valid ones).")
 
@@ -59,7 +59,9 @@ def shown_value(cfg, key: str) -> str:
     parent, _, leaf = key.rpartition(".")
     node = OmegaConf.select(cfg, parent) if parent else cfg
     if not OmegaConf.is_config(node) or leaf not in node.keys():   # `in` skips a missing value
-        return "not in this config"
+        group = key.partition(".")[0]
+        choice = OmegaConf.select(cfg, f"hydra.runtime.choices.{group}", default=None)
+        return f"not used with {group}={choice}" if choice else "not in this config"
     if OmegaConf.is_missing(node, leaf):
         return "??? (needed)"
     value = OmegaConf.select(cfg, key)
