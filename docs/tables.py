@@ -275,3 +275,64 @@ def live_soak():
             "the loop itself is one. Load is the 1-minute load average of the 2-core machine, shared with other "
             "work: p99 moves with it.")
     return "\n".join(lines) + "\n\n" + note, records
+
+# ---- calibration: few presses and a fitted scene (bench/calibrate.py) ----------------------------
+
+CALIBRATE_METHODS = {"scratch": "scratch", "default_scene": "default-scene pretraining",
+                     "fitted_scene": "fitted-scene pretraining", "chosen": "chosen on validation"}
+
+
+@table("calibrate/learning_curves")
+def calibrate_learning_curves():
+    """Test mean R² per scene, N and method; the number of (draw, seed) runs under the table."""
+    records = newest("calibrate", lambda name: "/N=" in name and not name.startswith("command/"))
+    sizes = sorted({int(r["name"].split("=")[1]) for r in records})
+    lines = ["| scene | method | " + " | ".join(f"N = {n}" for n in sizes) + " |", "|---" * (len(sizes) + 2) + "|"]
+    scenes = list(dict.fromkeys(r["name"].split("/")[0] for r in records))
+    for scene in scenes:
+        mine = {int(r["name"].split("=")[1]): r["values"]["test_mean_r2"] for r in records
+                if r["name"].startswith(scene + "/")}
+        for method, words in CALIBRATE_METHODS.items():
+            cells = [format_mean_sd(mine[n][method], ".3f") if n in mine else "—" for n in sizes]
+            lines.append(f"| {scene} | {words} | " + " | ".join(cells) + " |")
+    v = records[0]["values"]
+    note = (f"Test R² (mean over the scene's targets) on {v['n_test']} held-out presses of a rig stand-in, mean ± sd "
+            f"over {v['draws']} hidden draws × {v['seeds_per_draw']} seed(s) ({seeds_label(records[0]['seeds'])})"
+            + ("; `--quick` settings: 1,000 simulated presses, 100 trees, 40 fit simulations" if v["quick"] else "")
+            + ".")
+    return "\n".join(lines) + "\n\n" + note, records
+
+
+@table("calibrate/recovery")
+def calibrate_recovery():
+    """Per scene and parameter: how often the hidden value lay inside the fit's 95 % interval."""
+    records = newest("calibrate", lambda name: name.endswith("/recovery"))
+    lines = ["| scene | parameter | inside the 95 % interval | at a bound | median \\|fitted − hidden\\| / hidden "
+             "| median sd / value |", "|---|---|---|---|---|---|"]
+    for record in records:
+        pairs = record["values"]["pairs"]
+        for name in dict.fromkeys(p["parameter"] for p in pairs):
+            rows = [p for p in pairs if p["parameter"] == name]
+            error = sorted(abs(p["fitted"] - p["hidden"]) / abs(p["hidden"]) for p in rows)
+            sd = sorted(p["sd"] / abs(p["fitted"]) for p in rows)
+            lines.append(f"| {record['name'].split('/')[0]} | `{name}` | {sum(p['inside_95'] for p in rows)} of "
+                         f"{len(rows)} | {sum(p['at_bound'] for p in rows)} | {error[len(error) // 2]:.1%} | "
+                         f"{sd[len(sd) // 2]:.1%} |")
+    inside = [p["inside_95"] for record in records for p in record["values"]["pairs"]]
+    note = (f"{sum(inside)} of {len(inside)} (parameter, run) pairs inside the reported 95 % interval (1.96 sd), "
+            "fitted on N = 20 presses (their training part).")
+    return "\n".join(lines) + "\n\n" + note, records
+
+
+@table("calibrate/command")
+def calibrate_command():
+    """The one command's wall time per scene and table size."""
+    records = newest("calibrate", lambda name: name.startswith("command/"))
+    lines = ["| scene | presses in the table | wall time of the one command |", "|---|---|---|"]
+    for record in records:
+        v = record["values"]
+        wall = seconds(v["wall_s"]) if len(v["wall_s"]) > 1 else f"{v['wall_s'][0]:.0f} s (one run)"
+        lines.append(f"| {record['name'].split('/')[1]} | {v['presses']} | {wall} |")
+    note = (f"`{records[0]['values']['command']}` with every default (2,000 simulated presses per scene, 200 trees), "
+            f"one run each on the 2-core machine, load {records[0]['load_before']:.1f} before the first.")
+    return "\n".join(lines) + "\n\n" + note, records
