@@ -102,7 +102,7 @@ def plot_learning_curves() -> Path:
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    names = dict.fromkeys(r["name"] for r in read_records(RESULTS / "calibrate.jsonl") if "/N=" in r["name"])
+    names = dict.fromkeys(r["name"] for r in read_records(RESULTS / "calibrate.jsonl") if "/N=" in r["name"] and not r["name"].startswith("command/"))
     records = [latest("calibrate", name) for name in names]
     scenes = list(dict.fromkeys(name.split("/")[0] for name in names))
     figure, axes = plt.subplots(1, len(scenes), figsize=(4.2 * len(scenes), 3.4), squeeze=False)
