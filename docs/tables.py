@@ -191,11 +191,20 @@ def spread_or_missing(values, spec: str) -> str:
     return text + (f" ({failed} failed)" if failed and text != "failed" else "")
 
 
+def tsc_runs_of(command_matches) -> list[dict]:
+    """The newest tsc_peers record of each name among the runs whose command matches (a later run
+    of other methods on the same set does not take a table's rows away)."""
+    own = {}
+    for record in read_records(result_records.RESULTS / "tsc_peers.jsonl"):
+        if command_matches(record["command"]) and not record["name"].startswith("quick/"):
+            own[record["name"]] = record
+    return list(own.values())
+
+
 @table("tsc_peers/two_sets")
 def tsc_peers_two_sets():
     """The bench-quick comparison: the same MiniRocket on the same official splits, ours and aeon's."""
-    records = [r for r in newest("tsc_peers", lambda name: not name.startswith("quick/"))
-               if "tsc_peers_two_sets" in r["command"]]   # the bench-quick run's own records
+    records = tsc_runs_of(lambda command: "tsc_peers_two_sets" in command)   # the bench-quick run's own records
     lines = ["| set | method | side | test accuracy | fit (s) | latency per recording (ms) | seeds |",
              "|---|---|---|---|---|---|---|"]
     for record in sorted(records, key=lambda r: (r["values"]["set"], r["values"]["method"])):
@@ -218,12 +227,19 @@ def _default_choices(runs: list[dict]) -> str:
     text = ", ".join(f"`{name}` × {count}" for name, count in kept.items())
     traded = [r["trade"] for r in runs if r.get("trade") and r["trade"]["kept"] != r["trade"]["most_accurate"]]
     if traded:
-        given = [t["accuracy_given_up"]["difference"] for t in traded]
-        text += (f"; cost rule kept the cheaper on {len(traded)} of {len(runs)} (gave up "
-                 f"{min(given):.3f}–{max(given):.3f} held-out accuracy)")
-    skipped = sorted({name for r in runs for name in r.get("skipped") or []})
+        given = sorted({round(t["accuracy_given_up"]["difference"], 3) for t in traded})
+        shown = f"{given[0]:.3f}" if len(given) == 1 else f"{given[0]:.3f}–{given[-1]:.3f}"
+        text += (f"; cost rule kept the cheaper on {len(traded)} of {len(runs)} (gave up {shown} held-out "
+                 f"accuracy against {', '.join(sorted({t['most_accurate'] for t in traded}))})")
+    skipped = {}
+    for r in runs:
+        for name in r.get("skipped") or []:
+            skipped[name] = skipped.get(name, 0) + 1
     if skipped:
-        text += f"; not fitted: {', '.join(skipped)}"
+        text += "; not fitted (runs): " + ", ".join(f"{name} {count}" for name, count in skipped.items())
+    fits = [r.get("fit_s") for r in runs]
+    if len(runs) > 1 and None not in fits and max(fits) > 10 * min(fits):   # a mean ± sd would hide it
+        text += "; fit s by seed " + ", ".join(f"{f:.1f}" for f in fits)
     return text
 
 
@@ -231,8 +247,7 @@ def _default_choices(runs: list[dict]) -> str:
 def tsc_peers_default_against_aeon():
     """The default (no model=) and MiniRocket against aeon's MiniRocket and MultiRocket-Hydra, per
     set, with what the default kept and why (bench/tsc_peers.py runs with the default in them)."""
-    records = [r for r in newest("tsc_peers", lambda name: not name.startswith("quick/"))
-               if " default" in r["command"] and "tsc_peers_two_sets" not in r["command"]]
+    records = tsc_runs_of(lambda command: " default" in command and "tsc_peers_two_sets" not in command)
     lines = ["| set | method | test accuracy | fit (s) | latency per recording (ms) | load | kept (default) |",
              "|---|---|---|---|---|---|---|"]
     for record in sorted(records, key=lambda r: (r["values"]["set"], not r["values"]["method"].startswith("aeon"),

@@ -199,9 +199,10 @@ class DilationGroup(nn.Module):
         Slice: 8d fewer comparisons per output, ~9-11 % of them at 427-1,460 steps, and no -inf
         mask to add, ~12 % of the graph's node time), on blocks of kernels where a dilation's
         comparisons overflow the cache; one Gather puts the features back in kernel order.
-        Measured against the masked form (one thread, CPU time of a single-window call): 6 % less
-        at 427 steps, 11 % less at 1,460; at 150-251 steps (several dilations per step) splitting
-        the halves cost 4-9 % more, so short windows keep the mask."""
+        Measured against the masked form (one thread, CPU time of a single-window call, two runs at
+        load 4-6 beside other work): 10-11 % less at 1,460 steps, -6 % and +3 % at 427 (within that
+        load's noise); splitting the halves where a step holds several dilations cost 4-9 % more at
+        150-251 steps, so short windows keep the mask."""
         order = torch.tensor([[k for first in (whole, 1 - whole) for k in range(first, N_KERNELS, 2)]
                               for whole in ((self.first_index + j) % 2 for j in range(len(self.dilations)))])
         weights = self.kernel_weights()
