@@ -62,7 +62,7 @@ def simulate_at(scene, labels: pd.DataFrame) -> SensorTable:
 def channel_names(scene) -> list[str]:
     """The channels a scene reads, in its order: from one simulated press at rest-like labels."""
     calibration = calibration_for(scene)
-    probe = {name: [0.0] for name in calibration.inputs}
+    probe = {name: [1.0] for name in calibration.inputs}   # a press of some force: a sensed 0 N can read < 0
     if scene.name == "rubber12":
         probe.update(x_mm=[scene.side_mm / 2], y_mm=[scene.side_mm / 2])
     if scene.name == "capacitive6x6":

@@ -48,6 +48,15 @@ class FittedParameter:
     high: float
     at_bound: bool
     what: str
+    log: bool = False
+
+    def interval(self, z: float = 1.959964) -> tuple[float, float]:
+        """The two-sided interval of z sd (95 % by default): on the log scale for a parameter
+        fitted on one (value x/÷ exp(z sd / value), never below 0), else value ± z sd."""
+        if self.log:
+            factor = float(np.exp(z * self.sd / self.value))
+            return self.value / factor, self.value * factor
+        return self.value - z * self.sd, self.value + z * self.sd
 
 
 @dataclass
@@ -76,7 +85,8 @@ class FitResult:
         return {"scene": self.scene, "presses": len(self.measured), "evaluations": self.n_evaluations,
                 "time_s": self.time_s, "message": self.message,
                 "parameters": {p.path: {"value": p.value, "sd": p.sd, "unit": p.unit, "default": p.default,
-                                        "range": [p.low, p.high], "at_bound": p.at_bound, "what": p.what}
+                                        "range": [p.low, p.high], "interval_95": list(p.interval()),
+                                        "at_bound": p.at_bound, "what": p.what}
                                for p in self.parameters},
                 "residual_rms": self.residual_rms, "default_residual_rms": self.default_residual_rms,
                 "not_identifiable": self.notes.get("not_identifiable", {}),
@@ -145,7 +155,7 @@ def identify(scene, presses: pd.DataFrame, max_evaluations: int = 60) -> tuple[F
         slope = value * (np.log(p.high) - np.log(p.low)) if p.log else p.high - p.low   # d value / d u
         set_value(fitted_scene, p.path, value)
         results.append(FittedParameter(p.path, p.unit, value, float(sd * slope), get_value(model, p.path), p.low,
-                                       p.high, bool(u < AT_BOUND or u > 1 - AT_BOUND), p.what))
+                                       p.high, bool(u < AT_BOUND or u > 1 - AT_BOUND), p.what, p.log))
     notes = {"not_identifiable": calibration.not_identifiable, "unmodelled": list(calibration.unmodelled)}
     if calibration.noise_path and calibration.noise_path.split(".")[1] in (scene.effects or {}):
         # what the fit leaves unexplained, per channel: the rig's noise level (an upper bound)

@@ -3,7 +3,7 @@
 - `scene/calibrated.yaml`: the fitted scene, a config `scene=` accepts
   (`python train.py hydra.searchpath=[file://<run>] scene=calibrated ...`): the scene's own
   config with the fitted values in place, every listed effect kept;
-- `fit_report.md`: parameters ± sd and their 95 % intervals, the ones at a bound flagged,
+- `fit_report.md`: parameters ± sd and their 95 % intervals (log scale for log parameters), the ones at a bound flagged,
   residuals per channel at the scene's values and at the fitted ones, what the fit cannot
   identify and which effects it leaves out, and the pretraining choice with its reason;
 - `measured_vs_simulated.png` (and TensorBoard `figures/measured_vs_simulated`): per channel,
@@ -20,7 +20,6 @@ from runs.report.figure_files import write_figures
 from runs.report.plots import panel_grid
 
 SCENE_FILE = Path("scene") / "calibrated.yaml"
-Z95 = 1.959964   # two-sided 95 % normal quantile
 
 
 def calibrated_config(cfg, fit) -> dict:
@@ -46,7 +45,7 @@ def _report_text(fit, choice) -> str:
              "|---|---|---|---|---|---|---|"]
     for p in fit.parameters:
         lines.append(f"| `{p.path}` ({p.what}) | {p.unit} | {p.default:.4g} | {p.value:.4g} ± {p.sd:.2g} | "
-                     f"{p.value - Z95 * p.sd:.4g} … {p.value + Z95 * p.sd:.4g} | {p.low:.3g} … {p.high:.3g} | "
+                     f"{p.interval()[0]:.4g} … {p.interval()[1]:.4g} | {p.low:.3g} … {p.high:.3g} | "
                      f"{'**yes**: not a confidence interval' if p.at_bound else 'no'} |")
     lines += ["", "Residual rms per column (simulated − measured, the column's unit):", "",
               "| column | scene's values | fitted |", "|---|---|---|"]

@@ -7,6 +7,8 @@ from hydra.utils import instantiate
 
 from common.errors import InputError
 from data.calibration.calibration_table import CalibrationTableSource
+from data.calibration.identifiable import CALIBRATIONS
+from data.calibration.press_simulation import channel_names
 from data.calibration.rig_standin import rig_presses
 
 
@@ -39,6 +41,14 @@ def test_the_table_is_served_under_the_scenes_channels_in_its_order(tmp_path, ru
     assert table.channel_columns == [f"r_{k:02d}_ohm" for k in range(1, 13)]
     assert table.target_columns == ["x_mm", "y_mm", "depth_mm", "pressure_pa"]
     np.testing.assert_allclose(table.channels, presses[table.channel_columns].to_numpy())
+
+
+@pytest.mark.parametrize("name", sorted(CALIBRATIONS))
+def test_the_expected_channels_are_the_scenes_own(compose_config, name):
+    scene = instantiate(compose_config([f"scene={name}", "scene.progress=false"]).scene)
+    own = {"rubber12": lambda: [f"r_{k:02d}_ohm" for k in range(1, 13)], "taxels": lambda: scene.channel_names(),
+           "capacitive6x6": lambda: [f"rmc_r{r}_c{c}" for r in range(scene.rows) for c in range(scene.cols)]}[name]
+    assert channel_names(scene) == own()
 
 
 def test_a_rigs_own_channel_names_are_mapped(tmp_path, rubber12, presses):

@@ -26,7 +26,12 @@ def test_hidden_parameters_are_recovered_within_the_reported_interval(taxels):
     fit, fitted_scene = identify(scene, presses, max_evaluations=60)
     for p in fit.parameters:
         assert not p.at_bound and p.sd > 0, p
-        assert abs(p.value - hidden[p.path]) <= Z95 * p.sd, (p.path, p.value, p.sd, hidden[p.path])
+        low, high = p.interval()
+        assert low <= hidden[p.path] <= high, (p.path, p.value, p.sd, hidden[p.path])
+        if p.log:   # the interval is symmetric on the log scale, so it never reaches 0
+            assert low > 0 and low * high == pytest.approx(p.value**2)
+        else:
+            assert (low, high) == pytest.approx((p.value - Z95 * p.sd, p.value + Z95 * p.sd), rel=1e-3)
         assert get_value(fitted_scene, p.path) == p.value
         moved = abs(hidden[p.path] - p.default)
         assert abs(p.value - hidden[p.path]) < max(moved, Z95 * p.sd)   # closer than the scene's own value, or within noise
