@@ -18,7 +18,7 @@ from data.preprocessing.features import FEATURE_GROUPS, compute_features
 from data.preprocessing.virtual_force_levels import virtual_force_levels
 from models.uncertainty import conformal_quantile, normalised_scores
 from models.weighted_blend import validation_weights
-from runs.report.metrics import regression_metrics
+from runs.report.metrics import nonzero_rows, regression_metrics
 
 ALL = list(FEATURE_GROUPS)
 def examples(n):
@@ -149,15 +149,18 @@ targets = arrays(np.float64, st.tuples(st.integers(1, 30), st.just(2)),
 def test_metrics_are_defined_for_constant_zero_single_and_perfect(y, kind):
     predicted = {"perfect": y, "constant": np.zeros_like(y) + 1.0, "noisy": y + 1.0}[kind]
     scores = regression_metrics(y, predicted, ["a_mm", "b_pa"])
-    for target in ("a_mm", "b_pa"):
+    for column, target in enumerate(("a_mm", "b_pa")):
         row = scores[target]
-        assert np.isfinite([row["rmse"], row["mae"], row["mape_pct"]]).all()
+        assert np.isfinite([row["rmse"], row["mae"]]).all()
+        # a percentage error is defined on the rows whose true value is not zero: none, none reported
+        assert (row["mape_pct"] is None) == (not nonzero_rows(y[:, column]).any())
+        assert row["mape_pct"] is None or np.isfinite(row["mape_pct"])
         if len(y) < 2:
             assert row["r2"] is None  # undefined for one sample: reported as null
         else:
             assert np.isfinite(row["r2"])
         if kind == "perfect":
-            assert row["rmse"] == 0 and row["mape_pct"] == 0 and (row["r2"] in (None, 1.0))
+            assert row["rmse"] == 0 and row["mape_pct"] in (None, 0) and (row["r2"] in (None, 1.0))
 
 
 @examples(1000)
