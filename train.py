@@ -173,7 +173,10 @@ def preflight(argv: list[str]) -> dict | None:
     those flags)."""
     flags = {arg for arg in argv if arg.startswith("-")}
     if flags & {"--help", "-h"}:
-        print(help_page(ROOT / "configs", composed([a for a in argv if not a.startswith("-")])))
+        try:
+            print(help_page(ROOT / "configs", composed([a for a in argv if not a.startswith("-")])), flush=True)
+        except BrokenPipeError:   # `train.py --help | head`: the reader had enough, not an error
+            os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         sys.exit(0)
     if flags - {"-m", "--multirun"}:
         return None

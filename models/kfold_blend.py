@@ -71,7 +71,8 @@ class KFoldBlend(IntervalMixin, TouchstoneRegressor):
             folds, self.fold_warning_ = kfold_indices(len(X), self.n_folds, self.seed, groups)
         if self.fold_warning_:
             log.warning(self.fold_warning_)
-        for k, (fit_rows, held_rows) in enumerate(progress(folds, desc="k-fold", unit="folds", enabled=self.progress)):
+        desc, unit = ("seed ensemble", "members") if self.resample == "seeds" else ("k-fold", "folds")
+        for k, (fit_rows, held_rows) in enumerate(progress(folds, desc=desc, unit=unit, enabled=self.progress)):
             model = clone(self.estimator)
             if "seed" in model.get_params():
                 model.set_params(seed=self.seed + k)

@@ -36,6 +36,15 @@ def test_help_is_one_page_of_the_settings_a_user_changes_first(tmp_path):
     assert not (tmp_path / "outputs").exists()
 
 
+def test_help_piped_into_a_reader_that_stops_early_is_no_error(tmp_path):
+    """`python train.py --help | head`: a reader that closes the pipe early (here at once) printed a
+    BrokenPipe traceback and exit 1."""
+    command = f"{sys.executable} {ROOT / 'train.py'} --help | true"
+    result = subprocess.run(["bash", "-o", "pipefail", "-c", command], capture_output=True, text=True, cwd=tmp_path,
+                            timeout=300)
+    assert result.returncode == 0 and result.stderr == ""
+
+
 def test_help_all_is_hydras_full_page(tmp_path):
     result = train("--help-all", cwd=tmp_path)
     assert result.returncode == 0 and "== Config ==" in result.stdout
