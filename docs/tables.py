@@ -272,8 +272,8 @@ def live_soak():
     the first and last 10 % of predictions, the loop's own cost per prediction."""
     records = newest("soak_stream")
     lines = ["| kind | lines in | predictions (expected) | lost / duplicated | memory after warm-up → end (MB) "
-             "| p50 first → last 10 % (µs) | p99 first → last 10 % (µs) | p99 drift | loop overhead per prediction "
-             "(µs) | threads | load before / after |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "| p50 first → last 10 % (µs) | p99 first → last 10 % (µs) | p99 drift | loop overhead per prediction, "
+             "CPU / wall (µs) | threads | load before / after |", "|---|---|---|---|---|---|---|---|---|---|---|"]
     for record in records:
         v = record["values"]
         drift = v["p99_last_us"] / v["p99_first_us"] - 1
@@ -281,14 +281,16 @@ def live_soak():
                      f"{v['lost']} / {v['duplicated']} | {v['rss_after_warmup_mb']:.1f} → {v['rss_end_mb']:.1f} "
                      f"({v['rss_end_mb'] - v['rss_after_warmup_mb']:+.1f}) | {v['p50_first_us']:,.0f} → "
                      f"{v['p50_last_us']:,.0f} | {v['p99_first_us']:,.0f} → {v['p99_last_us']:,.0f} | {drift:+.0%} | "
-                     f"{v['overhead_us']:.1f} | {v['most_threads']} | {record['load_before']:.1f} / "
+                     f"{v['overhead_cpu_us']:.1f} / {v['overhead_us']:.1f} | {v['most_threads']} | "
+                     f"{record['load_before']:.1f} / "
                      f"{record['load_after']:.1f} |")
     note = ("One run per kind (seed 0 for the model), `predict.py input=- backlog=wait threads=1` reading a stream "
             "generated from the scene's readings; latency per prediction is predict.py's own `latency_us` (line "
-            "taken to prediction ready); loop overhead is its wall time per prediction minus onnxruntime's (or the "
-            "tracker's) mean time per call. Threads counts the process's threads (onnxruntime's pool included), "
-            "the loop itself is one. Load is the 1-minute load average of the 2-core machine, shared with other "
-            "work: p99 moves with it.")
+            "taken to prediction ready); loop overhead is predict.py's CPU time per prediction minus the model "
+            "calls' own (onnxruntime's, or the tracker's update), and the same in wall time, which includes the "
+            "time the process waited for a core on the shared machine. Threads counts the process's threads "
+            "(an allocator's and onnxruntime's included); the loop itself is one. Load is the 1-minute load "
+            "average of the 2-core machine, shared with other work: p99 moves with it.")
     return "\n".join(lines) + "\n\n" + note, records
 
 # ---- calibration: few presses and a fitted scene (bench/calibrate.py) ----------------------------
