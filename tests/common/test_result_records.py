@@ -113,6 +113,24 @@ def test_a_record_from_another_lock_is_refused(tree):
         latest("forest", "scores")
 
 
+def test_a_lock_that_only_adds_packages_keeps_the_records(tree):
+    """Every pin of the record's lock (git's copy at its commit) kept, one package added: the
+    record stands; a pin moved or dropped: refused."""
+    import subprocess
+    lock = tree / "requirements.lock"
+    lock.write_text("numpy==2.4.6 \\\n    --hash=sha256:00\n    # via -r requirements.txt\n")
+    git = ["git", "-c", "user.name=t", "-c", "user.email=t@t"]
+    for command in (["init", "-q"], ["add", "."], ["commit", "-qm", "measured"]):
+        subprocess.run(git + command, cwd=tree, check=True)
+    with recording("forest", ["models/"], command="c") as record:
+        record.add("scores", {"value": 1})
+    lock.write_text(lock.read_text() + "pyserial==3.5 \\\n    --hash=sha256:22\n")
+    assert latest("forest", "scores")["values"] == {"value": 1}
+    lock.write_text("numpy==2.4.6 \\\n    --hash=sha256:01\npyserial==3.5 \\\n    --hash=sha256:22\n")
+    with pytest.raises(RecordError, match="measured under lock"):
+        latest("forest", "scores")
+
+
 def test_a_missing_record_or_file_is_named(tree):
     with pytest.raises(RecordError, match="no such results file"):
         latest("forest", "scores")
