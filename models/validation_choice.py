@@ -302,10 +302,9 @@ class ValidationChoice(TouchstoneEstimator):
         return capabilities(estimator).epochs and "max_epochs" in estimator.get_params()
 
     def _first_rung(self, nets, candidates, costs, fitted, start, spent_per_cost, outputs, y_scored):
-        """Successive halving's first rung: every net still worth fitting (the budget judged on
-        (1 + 1/halving) of its cost) trained for 1/halving of its epochs and scored as a full fit
-        would be; only the best 1/halving by that held-out accuracy (ties: the cheaper) go on to a
-        full fit, the others are named in skipped_ with their rung's score (rungs_)."""
+        """Successive halving's first rung: every net still worth fitting (the budget judged on (1 +
+        1/halving) of its cost) trained for 1/halving of its epochs and scored as a full fit would be;
+        only the best 1/halving (ties: the cheaper) fit in full, the others are named in skipped_."""
         for name in nets:
             # judged on its rung and the full fit it may lead to: a rung whose full fit cannot follow buys nothing
             reason = self._why_not(name, costs[name] * (1 + 1 / self.halving), time.perf_counter() - start,
@@ -418,7 +417,8 @@ class ValidationChoice(TouchstoneEstimator):
                      f"({self.latency_ms_[self.chosen_]:.2f} against {self.latency_ms_[top]:.2f} ms, eager batch 1; "
                      f"fits {self.fit_time_s_[self.chosen_]:.1f} s against {self.fit_time_s_[top]:.1f} s)")
         if self.skipped_:
-            text += "; not fitted: " + "; ".join(f"{n} ({why})" for n, why in self.skipped_.items())
+            by_reason = {why: [n for n, w in self.skipped_.items() if w == why] for why in self.skipped_.values()}
+            text += "; not fitted: " + "; ".join(f"{', '.join(names)} ({why})" for why, names in by_reason.items())
         return text
 
     @property
