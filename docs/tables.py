@@ -304,17 +304,20 @@ def calibrate_learning_curves():
     """Test mean R² per scene, N and method; the number of (draw, seed) runs under the table."""
     records = newest("calibrate", lambda name: "/N=" in name and not name.startswith("command/"))
     sizes = sorted({int(r["name"].split("=")[1]) for r in records})
-    lines = ["| scene | method | " + " | ".join(f"N = {n}" for n in sizes) + " |", "|---" * (len(sizes) + 2) + "|"]
+    lines = ["| scene (runs) | method | " + " | ".join(f"N = {n}" for n in sizes) + " |",
+             "|---" * (len(sizes) + 2) + "|"]
     scenes = list(dict.fromkeys(r["name"].split("/")[0] for r in records))
     for scene in scenes:
         mine = {int(r["name"].split("=")[1]): r["values"]["test_mean_r2"] for r in records
                 if r["name"].startswith(scene + "/")}
+        v = next(r["values"] for r in records if r["name"].startswith(scene + "/"))
+        runs = f"{v['draws']} draws × {v['seeds_per_draw']} seed{'s' if v['seeds_per_draw'] > 1 else ''}"
         for method, words in CALIBRATE_METHODS.items():
             cells = [format_mean_sd(mine[n][method], ".3f") if n in mine else "—" for n in sizes]
-            lines.append(f"| {scene} | {words} | " + " | ".join(cells) + " |")
+            lines.append(f"| {scene} ({runs}) | {words} | " + " | ".join(cells) + " |")
     v = records[0]["values"]
     note = (f"Test R² (mean over the scene's targets) on {v['n_test']} held-out presses of a rig stand-in, mean ± sd "
-            f"over {v['draws']} hidden draws × {v['seeds_per_draw']} seed(s) ({seeds_label(records[0]['seeds'])})"
+            "over each scene's hidden draws and seeds"
             + ("; `--quick` settings: 1,000 simulated presses, 100 trees, 40 fit simulations" if v["quick"] else "")
             + ".")
     return "\n".join(lines) + "\n\n" + note, records
@@ -336,7 +339,8 @@ def calibrate_recovery():
                          f"{len(rows)} | {sum(p['at_bound'] for p in rows)} | {error[len(error) // 2]:.1%} | "
                          f"{sd[len(sd) // 2]:.1%} |")
     inside = [p["inside_95"] for record in records for p in record["values"]["pairs"]]
-    note = (f"{sum(inside)} of {len(inside)} (parameter, run) pairs inside the reported 95 % interval (1.96 sd), "
+    note = (f"{sum(inside)} of {len(inside)} (parameter, run) pairs inside the reported 95 % interval (1.96 sd; "
+            "on the log scale for parameters fitted on one), "
             "fitted on N = 20 presses (their training part).")
     return "\n".join(lines) + "\n\n" + note, records
 
