@@ -19,6 +19,7 @@ import select
 import socket
 import stat
 import sys
+import termios
 from collections import deque
 
 from common.errors import InputError
@@ -140,6 +141,13 @@ def _serial_source(path: str, baud: int) -> LineSource:
         port = serial.Serial(path, baudrate=baud, timeout=None)
     except (serial.SerialException, ValueError, OSError) as error:
         raise InputError(f"input={path}: cannot open the serial port ({str(error).splitlines()[0][:120]})") from None
+    # pyserial leaves the port non-blocking with VMIN = 0 (its own reads select first): a plain read
+    # then returns b"" at once when no byte has arrived yet, which this source would take for the
+    # end of the stream. Reads here block until at least one byte (VMIN = 1, VTIME = 0).
+    os.set_blocking(port.fileno(), True)
+    attributes = termios.tcgetattr(port.fileno())
+    attributes[6][termios.VMIN], attributes[6][termios.VTIME] = 1, 0
+    termios.tcsetattr(port.fileno(), termios.TCSANOW, attributes)
     return LineSource(port.fileno(), path, port.close)
 
 

@@ -12,6 +12,7 @@ import socket
 import subprocess
 import sys
 import threading
+import time
 from pathlib import Path
 
 import numpy as np
@@ -71,19 +72,24 @@ def started(argv) -> tuple[subprocess.Popen, threading.Timer]:
 def through_pty(model, lines, *args) -> tuple[int, str, str]:
     """The lines written into a pseudo-terminal's master while predict.py reads its serial end;
     the master closes once predict.py said it reads (the end of the stream, as a cable pulled)."""
-    pytest.importorskip("serial")
-    master, slave = os.openpty()
+    master, slave = os.openpty()   # predict.py opens the slave end with pyserial (requirements.lock pins it)
     process, watchdog = started(command(model, f"input={os.ttyname(slave)}", *args))
     try:
         first = process.stderr.readline()
         assert first.startswith("reading "), first
+        # a port is quiet until the rig sends: predict.py's first read waits on an empty port (a read
+        # that returned at once there ended the stream before its first line, as pyserial's VMIN = 0 did)
+        time.sleep(0.3)
         os.write(master, ("\n".join(lines) + "\n").encode())
         out_lines = [process.stdout.readline()]   # the header, then one line per prediction
         expected = predictions_expected(model, lines)
         while len(out_lines) < 1 + expected:
             out_lines.append(process.stdout.readline())
         os.close(master)
-        out, err = process.communicate()
+        # read the rest through the same buffered files: communicate() reads the raw pipes and would
+        # lose what readline() had already buffered
+        process.wait()
+        out, err = process.stdout.read(), process.stderr.read()
     finally:
         watchdog.cancel()
         os.close(slave)
@@ -95,8 +101,8 @@ def predictions_expected(model, lines) -> int:
     name = Path(model).name
     if name == "cls.onnx":
         return len(good) // WINDOW_STEPS
-    if name == "force.onnx":
-        return len(good) - N_REST
+    if name == "force.onnx":   # a frame is 36 finite cells; the tracker's test mixes in its own bad frames
+        return len([line for line in good if len(line.split(",")) == 36 and "nan" not in line]) - N_REST
     return len(good)
 
 
