@@ -293,6 +293,7 @@ def live_soak():
             "average of the 2-core machine, shared with other work: p99 moves with it.")
     return "\n".join(lines) + "\n\n" + note, records
 
+
 # ---- calibration: few presses and a fitted scene (bench/calibrate.py) ----------------------------
 
 CALIBRATE_METHODS = {"scratch": "scratch", "default_scene": "default-scene pretraining",

@@ -138,6 +138,9 @@ def test_selection_rows_use_the_papers_statistics():
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="row 13 does not hold on the scene since its cycle_response effect was sized "
+                   "to the paper's repeat CV (issue 42): reductions -0.81/-0.61/0.14/0.13 (x, y, depth, P) over 3 seeds; "
+                   "strict, so the day it holds again this marker must go")
 def test_kfold_blending_steadies_the_net():
     """Row 13 (seed §IV-D: K-fold blending reduced the net's prediction variance, 8.3 %), measured
     as bench/kfold_variance.py prints it with the documented settings (table: 10.5-66.6 %), ~3 min."""
