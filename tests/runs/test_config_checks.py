@@ -8,15 +8,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.conftest import CONFIG_DIR, tiny
 from hydra import compose, initialize_config_dir
 from hydra.core.hydra_config import HydraConfig
 from hydra.utils import instantiate
+from omegaconf import OmegaConf
 
 from common.errors import InputError
 from models.resmlp_regressor import ResMLPRegressor
 from runs.config_checks import check_config
 from runs.run import run
+from tests.conftest import CONFIG_DIR, tiny
 
 ROOT = Path(__file__).resolve().parents[2]
 EXPERIMENTS = sorted(p.stem for p in (ROOT / "configs" / "experiment").glob("*.yaml"))
@@ -195,15 +196,24 @@ def test_the_run_logs_the_warning_of_its_own_overrides(tmp_path, caplog):
 def task_models(experiment: str) -> list[str]:
     """The models an experiment can run: the time-series classifiers for recordings, the others
     for presses (experiment=taxel_inverse sizes model.n_estimators, so trees only)."""
-    if experiment == "taxel_inverse":
+    if experiment in ("taxel_inverse", "calibrate"):
         return ["decision_tree", "extra_trees", "random_forest"]
     time_series = composed([f"experiment={experiment}"]).data._target_.endswith("TimeSeriesDataModule")
     return sorted(m for m in MODELS if (m in TIME_SERIES_MODELS) == time_series)
 
 
+def with_its_file(experiment: str, folder) -> list[str]:
+    """An experiment on the user's own presses (experiment=calibrate) needs data.path, as its user gives it."""
+    if not OmegaConf.is_missing(composed([f"experiment={experiment}"]).data, "path"):
+        return [f"experiment={experiment}"]
+    presses = folder / "presses.csv"
+    presses.write_text("x_mm,y_mm,depth_mm\n1,2,0.5\n")
+    return [f"experiment={experiment}", f"data.path={presses}"]
+
+
 @pytest.mark.parametrize("experiment", EXPERIMENTS)
-def test_every_experiment_passes_the_checks(experiment):
-    assert check_config(composed([f"experiment={experiment}"])) == []
+def test_every_experiment_passes_the_checks(experiment, tmp_path):
+    assert check_config(composed(with_its_file(experiment, tmp_path))) == []
 
 
 @pytest.mark.parametrize("model", MODELS)
@@ -214,12 +224,12 @@ def test_every_model_passes_the_checks(model):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("experiment", EXPERIMENTS)
-def test_every_experiment_passes_the_checks_with_each_model(experiment):
+def test_every_experiment_passes_the_checks_with_each_model(experiment, tmp_path):
     """Every model of the experiment's task passes; any other is a one-line InputError, not a
     traceback (a classifier on presses, the blend on recordings, a net where trees are sized)."""
     usable = task_models(experiment)
     for model in MODELS:
-        cfg = composed([f"experiment={experiment}", f"model={model}"])
+        cfg = composed(with_its_file(experiment, tmp_path) + [f"model={model}"])
         if model in usable:
             assert check_config(cfg) == [], model
         else:
