@@ -21,7 +21,7 @@ lock:                         ## re-resolve requirements-dev.txt (ranges) into r
 train: install                ## python train.py on the default simulated scene (make train ARGS="model=resmlp")
 	$(PY) train.py $(ARGS)
 
-test: install                 ## the default test suite (not marked slow) on both cores; its time is not recorded yet
+test: install                 ## the default test suite (not marked slow) on both cores; its time: results/test_suite.jsonl
 	$(PY) -m pytest -q -m "not slow" -n 2 --durations=15
 
 test-slow: install            ## the slow tests only
@@ -73,6 +73,8 @@ bench: install                ## every bench that records (many hours on 2 cores
 	$(BENCH_ENV) $(PY) bench/ert_localisation_floor.py
 	$(BENCH_ENV) $(PY) bench/ert_vs_pyeit.py
 	$(BENCH_ENV) $(PY) bench/ert_learned_validation.py
+	$(BENCH_ENV) $(PY) bench/ert_off_grid.py
+	$(BENCH_ENV) $(PY) bench/calibrate.py
 	$(BENCH_ENV) $(PY) bench/textile_layout_physics.py
 	$(BENCH_ENV) $(PY) bench/tsc_reference.py
 	$(BENCH_ENV) $(PY) bench/tsc_peers.py --out $(BENCH_TMP)/tsc_peers
@@ -82,6 +84,8 @@ bench: install                ## every bench that records (many hours on 2 cores
 	$(BENCH_ENV) $(PY) bench/ddp_step_time.py --repeats 3
 	$(BENCH_ENV) $(PY) bench/model_configs.py
 	$(BENCH_ENV) $(PY) bench/reproduce.py --recordings GunPoint
+	$(PY) bench/test_suite_time.py
+	$(PY) bench/test_suite_time.py --beside-busy
 	$(PY) docs/generate.py
 
 clean:
