@@ -25,7 +25,8 @@ def test_resmlp_learns_depth_on_unseen_presses(compose_config, tmp_path):
                           "model=resmlp", "trainer.progress=false", "trainer.max_epochs=150", "analysis.ablation=false"])
     test = run(cfg, tmp_path)["test"]
     print({t: round(test[t]["r2"], 4) for t in test})
-    # Measured 0.978 (x), 0.977 (y), 0.894 (depth), 0.845 (pressure) at seed 0 on issue 11's
-    # scene (0.996, 0.996, 0.866, 0.866 before it): the net untangles depth from position.
-    assert test["x_mm"]["r2"] > 0.97 and test["y_mm"]["r2"] > 0.97
-    assert test["depth_mm"]["r2"] > 0.75 and test["pressure_pa"]["r2"] > 0.75
+    # Measured 0.930 (x), 0.946 (y), 0.845 (depth), 0.774 (pressure) at seed 0 since the film's
+    # response varies from cycle to cycle as much as the paper's repeats do (cycle_response, issue
+    # 42; 0.978, 0.977, 0.894, 0.845 without it): the net still untangles depth from position.
+    assert test["x_mm"]["r2"] > 0.9 and test["y_mm"]["r2"] > 0.9
+    assert test["depth_mm"]["r2"] > 0.75 and test["pressure_pa"]["r2"] > 0.7
