@@ -3,7 +3,7 @@
     OMP_NUM_THREADS=1 .venv/bin/python bench/soak_stream.py                      # the issue's counts
     OMP_NUM_THREADS=1 .venv/bin/python bench/soak_stream.py --lines 200000 --windows 20000 --frames 100000
 
-For each kind, a model is trained on a scene and exported as a run does (seed 0, small settings:
+For each kind, a model is trained on a scene and exported as a run does (once per seed, small settings:
 the soak measures the stream, not the model's accuracy):
 - table: a residual MLP on the default scene (rubber12's presses), one prediction per line;
 - recordings: MiniRocket on materials10 (fingertip recordings), one prediction per hop of the
@@ -50,28 +50,27 @@ from runs.run import run  # noqa: E402
 # What the soak measures: the live loop and what it calls per line (not the --plot view, which it does not draw).
 MEASURED_CODE = ["predict.py", "export/onnx_predictor.py", "data/readers/stream_lines.py", "models/contact_tracking/"] \
     + [f"export/live/{name}.py" for name in ("sources", "backlog", "kinds", "loop", "writer", "summary")]
-SEED = 0
 OVERRIDES = {
     "table": ["model=resmlp", "scene.progress=false", "trainer.progress=false", "trainer.max_epochs=20",
-              "analysis.ablation=false", "analysis.progress=false", f"seed={SEED}"],
+              "analysis.ablation=false", "analysis.progress=false"],
     "recordings": ["experiment=materials10", "model=minirocket", "scene.passes_per_level=2",
-                   "trainer.progress=false", f"seed={SEED}"],
+                   "trainer.progress=false"],
     "tracker": ["experiment=capacitive_force", "hydra.mode=RUN", "model=linear_regression",
-                "scene.characterisation_channels=window", f"seed={SEED}"],
+                "scene.characterisation_channels=window"],
 }
 SAMPLE_S = 0.25
 FIGURE = ROOT / "bench" / "figures" / "live_plot.png"
 
 
-def compose_run(kind: str):
+def compose_run(kind: str, seed: int):
     with initialize_config_dir(config_dir=str(ROOT / "configs"), version_base="1.3"):
-        return compose("config", overrides=OVERRIDES[kind])
+        return compose("config", overrides=OVERRIDES[kind] + [f"seed={seed}"])
 
 
-def train(kind: str, folder: Path) -> tuple[Path, np.ndarray, list[str], int]:
+def train(kind: str, seed: int, folder: Path) -> tuple[Path, np.ndarray, list[str], int]:
     """The exported model, the readings a stream repeats (one row per line), predict.py's extra
     arguments, and the leading lines that are not predicted (the tracker's rest frames)."""
-    cfg = compose_run(kind)
+    cfg = compose_run(kind, seed)
     run(cfg, folder)
     model = export_run(folder)
     pipeline = load_pipeline(folder / "pipeline.npz")
@@ -179,34 +178,39 @@ def main(argv=None):
     parser.add_argument("--windows", type=int, default=100_000, help="recordings: windows predicted")
     parser.add_argument("--frames", type=int, default=1_000_000, help="tracker: frames streamed")
     parser.add_argument("--hop", type=int, default=4, help="recordings: steps between windows")
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2],
+                        help="one soak per seed: the model is trained with it (the stream is its scene's readings)")
     parser.add_argument("--plot-kind", default="table", help=f"the kind whose live view is drawn to {FIGURE}")
     args = parser.parse_args(argv)
     with recording("soak_stream", MEASURED_CODE) as record, tempfile.TemporaryDirectory() as tmp:
         for kind in args.kinds:
-            folder = Path(tmp) / kind
-            folder.mkdir()
-            model, readings, extra, rest = train(kind, folder / "run")
-            window = OnnxPredictor(model).window_steps if kind == "recordings" else 1
-            hop = args.hop if kind == "recordings" else None
-            n_lines = {"table": args.lines, "recordings": window + (args.windows - 1) * args.hop,
-                       "tracker": args.frames}[kind]
-            write_lines(folder / "stream.csv", readings, n_lines, rest)
-            print(f"{kind}: streaming {n_lines:,} lines through predict.py", file=sys.stderr, flush=True)
-            figures = soak(model, folder / "stream.csv", extra, folder, hop)
-            expected = expected_predictions(kind, n_lines, window, hop or 1, rest)
-            figures.update(kind=kind, lines_in=n_lines, expected_predictions=expected,
-                           lost=expected - figures["distinct_lines"], window_steps=window, hop=hop,
-                           overrides=OVERRIDES[kind])
-            record.add(kind, figures, seeds=[SEED])
-            if kind == args.plot_kind:
-                draw_live_view(model, folder / "stream.csv", extra, FIGURE)
-            print(f"{kind}: {n_lines:,} lines, {figures['predictions']:,} predictions ({figures['lost']} lost, "
-                  f"{figures['duplicated']} duplicated); RSS {figures['rss_after_warmup_mb']:.1f} -> "
-                  f"{figures['rss_end_mb']:.1f} MB; p50 {figures['p50_first_us']:.0f} -> {figures['p50_last_us']:.0f} "
-                  f"µs, p99 {figures['p99_first_us']:.0f} -> {figures['p99_last_us']:.0f} µs; loop overhead "
-                  f"{figures['overhead_us']:.1f} µs wall, {figures['overhead_cpu_us']:.1f} µs CPU per prediction; "
-                  f"threads {figures['most_threads']}", flush=True)
-
+            runs = []
+            for seed in args.seeds:
+                folder = Path(tmp) / f"{kind}_{seed}"
+                folder.mkdir()
+                model, readings, extra, rest = train(kind, seed, folder / "run")
+                window = OnnxPredictor(model).window_steps if kind == "recordings" else 1
+                hop = args.hop if kind == "recordings" else None
+                n_lines = {"table": args.lines, "recordings": window + (args.windows - 1) * args.hop,
+                           "tracker": args.frames}[kind]
+                write_lines(folder / "stream.csv", readings, n_lines, rest)
+                print(f"{kind}, seed {seed}: streaming {n_lines:,} lines through predict.py", file=sys.stderr,
+                      flush=True)
+                figures = soak(model, folder / "stream.csv", extra, folder, hop)
+                expected = expected_predictions(kind, n_lines, window, hop or 1, rest)
+                figures.update(seed=seed, lines_in=n_lines, expected_predictions=expected,
+                               lost=expected - figures["distinct_lines"], window_steps=window, hop=hop)
+                runs.append(figures)
+                if kind == args.plot_kind and seed == args.seeds[0]:
+                    draw_live_view(model, folder / "stream.csv", extra, FIGURE)
+                print(f"{kind}, seed {seed}: {n_lines:,} lines, {figures['predictions']:,} predictions "
+                      f"({figures['lost']} lost, {figures['duplicated']} duplicated); RSS "
+                      f"{figures['rss_after_warmup_mb']:.1f} -> {figures['rss_end_mb']:.1f} MB; p50 "
+                      f"{figures['p50_first_us']:.0f} -> {figures['p50_last_us']:.0f} µs, p99 "
+                      f"{figures['p99_first_us']:.0f} -> {figures['p99_last_us']:.0f} µs; loop overhead "
+                      f"{figures['overhead_us']:.1f} µs wall, {figures['overhead_cpu_us']:.1f} µs CPU per prediction; "
+                      f"threads {figures['most_threads']}", flush=True)
+            record.add(kind, {"kind": kind, "overrides": OVERRIDES[kind], "runs": runs}, seeds=list(args.seeds))
 
 if __name__ == "__main__":
     main()

@@ -270,27 +270,37 @@ def tsc_peers_default_against_aeon():
 def live_soak():
     """Each kind's newest soak: lines in and out, memory after warm-up and at the end, latency in
     the first and last 10 % of predictions, the loop's own cost per prediction."""
-    records = newest("soak_stream")
-    lines = ["| kind | lines in | predictions (expected) | lost / duplicated | memory after warm-up → end (MB) "
+    records = [r for r in newest("soak_stream") if "runs" in r["values"]]
+    lines = ["| kind | runs | lines in | predictions (expected) | lost / duplicated | memory growth after warm-up (MB) "
              "| p50 first → last 10 % (µs) | p99 first → last 10 % (µs) | p99 drift | loop overhead per prediction, "
-             "CPU / wall (µs) | threads | load before / after |", "|---|---|---|---|---|---|---|---|---|---|---|"]
+             "CPU / wall (µs) | threads | load before / after |", "|---|---|---|---|---|---|---|---|---|---|---|---|"]
+
+    def spread(runs, key, fmt=".0f"):
+        return format_mean_sd([run[key] for run in runs], fmt)
+
     for record in records:
-        v = record["values"]
-        drift = v["p99_last_us"] / v["p99_first_us"] - 1
-        lines.append(f"| {v['kind']} | {v['lines_in']:,} | {v['predictions']:,} ({v['expected_predictions']:,}) | "
-                     f"{v['lost']} / {v['duplicated']} | {v['rss_after_warmup_mb']:.1f} → {v['rss_end_mb']:.1f} "
-                     f"({v['rss_end_mb'] - v['rss_after_warmup_mb']:+.1f}) | {v['p50_first_us']:,.0f} → "
-                     f"{v['p50_last_us']:,.0f} | {v['p99_first_us']:,.0f} → {v['p99_last_us']:,.0f} | {drift:+.0%} | "
-                     f"{v['overhead_cpu_us']:.1f} / {v['overhead_us']:.1f} | {v['most_threads']} | "
-                     f"{record['load_before']:.1f} / "
-                     f"{record['load_after']:.1f} |")
-    note = ("One run per kind (seed 0 for the model), `predict.py input=- backlog=wait threads=1` reading a stream "
+        runs = record["values"]["runs"]
+        for run in runs:
+            run["growth_mb"] = run["rss_end_mb"] - run["rss_after_warmup_mb"]
+            run["drift"] = 100 * (run["p99_last_us"] / run["p99_first_us"] - 1)
+        lost = sum(run["lost"] for run in runs)
+        duplicated = sum(run["duplicated"] for run in runs)
+        lines.append(f"| {record['values']['kind']} | {len(runs)} | {runs[0]['lines_in']:,} | "
+                     f"{runs[0]['predictions']:,} ({runs[0]['expected_predictions']:,}) | {lost} / {duplicated} | "
+                     f"{spread(runs, 'growth_mb', '+.2f')} | {spread(runs, 'p50_first_us')} → "
+                     f"{spread(runs, 'p50_last_us')} | {spread(runs, 'p99_first_us')} → {spread(runs, 'p99_last_us')} "
+                     f"| {spread(runs, 'drift', '+.1f')} % | {spread(runs, 'overhead_cpu_us', '.1f')} / "
+                     f"{spread(runs, 'overhead_us', '.1f')} | {max(run['most_threads'] for run in runs)} | "
+                     f"{record['load_before']:.1f} / {record['load_after']:.1f} |")
+    note = ("One run per seed (the seed trains the model; the lines and predictions columns show one run's counts, "
+            "lost / duplicated are summed over runs), mean ± sd over runs; "
+            "`predict.py input=- backlog=wait threads=1` reading a stream "
             "generated from the scene's readings; latency per prediction is predict.py's own `latency_us` (line "
             "taken to prediction ready); loop overhead is predict.py's CPU time per prediction minus the model "
             "calls' own (onnxruntime's, or the tracker's update), and the same in wall time, which includes the "
             "time the process waited for a core on the shared machine. Threads counts the process's threads "
             "(an allocator's and onnxruntime's included); the loop itself is one. Load is the 1-minute load "
-            "average of the 2-core machine, shared with other work: p99 moves with it.")
+            "average of the 2-core machine before and after the whole bench: p99 moves with it.")
     return "\n".join(lines) + "\n\n" + note, records
 
 
