@@ -99,18 +99,24 @@ def row_order(number: str) -> tuple[int, str]:
 
 
 def run_checks(scene: str, probe) -> list[Row]:
-    """Measure every row of `scene`; a row pre-registered from the paper (runs/fidelity/registered/)
-    must be judged by its registered tolerance, and a row the paper cannot support says so."""
+    """Measure every row of `scene`; every row is pre-registered from the paper
+    (runs/fidelity/registered/) and must be judged by its registered tolerance, and a row the paper
+    cannot support says so. A row with no registration is refused before anything is measured."""
+    checks = sorted(CHECKS[scene], key=lambda fn: row_order(fn.observation[1]))
+    unregistered = [f"{fn.observation[0]}/{fn.observation[1]}" for fn in checks
+                    if registration(fn.observation[0], fn.observation[1]) is None]
+    if unregistered:
+        raise RuntimeError(f"fidelity rows {', '.join(unregistered)} are not registered: register the paper's words, "
+                           "the statistic and the tolerance in runs/fidelity/registered/ first")
     rows = []
-    for fn in sorted(CHECKS[scene], key=lambda fn: row_order(fn.observation[1])):
+    for fn in checks:
         name, number, statement, paper = fn.observation
         measured = fn(probe)
         registered = registration(name, number)
-        if registered is not None:
-            if measured.holds is not None and not measured.tolerance.startswith(registered.tolerance):
-                raise RuntimeError(f"fidelity row {name}/{number} was judged by '{measured.tolerance}', not by its "
-                                   f"registered tolerance '{registered.tolerance}' (runs/fidelity/registered/)")
-            measured.unsupported = registered.missing
+        if measured.holds is not None and not measured.tolerance.startswith(registered.tolerance):
+            raise RuntimeError(f"fidelity row {name}/{number} was judged by '{measured.tolerance}', not by its "
+                               f"registered tolerance '{registered.tolerance}' (runs/fidelity/registered/)")
+        measured.unsupported = registered.missing
         rows.append(Row(name, number, statement, paper, measured))
     return rows
 

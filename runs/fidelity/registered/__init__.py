@@ -4,8 +4,9 @@ measured and frozen (tests/runs/fidelity/test_registered.py: a tolerance changes
 quote). A row the paper cannot support names what the paper leaves out (`missing`); it is reported
 in its own section and not counted in the score.
 
-One module per scene (`rubber12`, `fingertip`, `capacitive6x6`, `ert`) registers its rows with
-`register`; `registration(scene, number)` is None for a row not registered yet.
+One module per scene (`rubber12`, `fingertip`, `capacitive6x6`, `ert`, `taxels`) registers its rows
+with `register`; `registration(scene, number)` is None for a row not registered yet, which the bench
+refuses to measure (runs/fidelity/observations.py `run_checks`).
 """
 from dataclasses import dataclass
 
@@ -42,4 +43,4 @@ def registration(scene: str, number: str) -> Registration | None:
 
 def _load() -> None:
     # imported on first use so that each scene's module can import `register` from here
-    from runs.fidelity.registered import capacitive6x6, ert, fingertip, rubber12  # noqa: F401
+    from runs.fidelity.registered import capacitive6x6, ert, fingertip, rubber12, taxels  # noqa: F401

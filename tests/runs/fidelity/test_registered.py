@@ -7,12 +7,24 @@ import pytest
 from runs.fidelity.observations import Measured, Row, markdown, run_checks, verdict
 from runs.fidelity.registered import REGISTRY, _load, register, registration
 
-# (quote, tolerance) digests as registered on 2026-12-06 (issue 42). A tolerance whose digest
+# (quote, tolerance) digests as registered on 2026-12-06 (issue 42; capacitive6x6, ert and taxels's
+# supported rows the same day, after rubber12's and fingertip's). A tolerance whose digest
 # differs must come with a quote whose digest differs too; then update the pair here.
 FROZEN = {
+    "capacitive6x6/1": ("85118e7b0485", "5d961a47ba6e"),
+    "capacitive6x6/2": ("250685ccf64d", "9bdc0fd745fe"),
+    "capacitive6x6/3": ("0a31cfa60cc9", "e6a47585509b"),
+    "capacitive6x6/4a": ("0c23fb39c051", "34ff44deabd0"),
+    "capacitive6x6/4b": ("6cf8e0b8d3d3", "b93b428b5e81"),
     "capacitive6x6/5": ("579fb6720a13", "2fef02af9c2c"),
+    "capacitive6x6/6": ("468fd9c86071", "2050615d0f29"),
+    "ert/1": ("c92f7d4c5ea7", "5dc008c01135"),
     "ert/2": ("9e47a7a0dc1c", "1811c74f0534"),
     "ert/3": ("9adfae072f86", "f7671f819924"),
+    "ert/4": ("0a33386c561d", "cee765097004"),
+    "ert/5": ("b1f3d71dddf4", "43774cbda9f4"),
+    "ert/6": ("0d601e3599bf", "f1b0e9a67636"),
+    "ert/7": ("7d3fd351fdd8", "7fda8efd95ee"),
     "fingertip/1": ("8876ef92c0d7", "9a55afc6ef6d"),
     "fingertip/2": ("3847f52f8bdc", "5d353bd03a2c"),
     "fingertip/3": ("62b770828c1f", "4ba4e3cb265b"),
@@ -33,6 +45,12 @@ FROZEN = {
     "rubber12/11": ("32976ad7ea0e", "0f370a36197a"),
     "rubber12/12": ("221aa2fb93a3", "6a857c171f96"),
     "rubber12/13": ("2eab867b3374", "df903838b8b4"),
+    "taxels/1": ("f9768d371d61", "af64996c767c"),
+    "taxels/2": ("a70986401fdf", "6cc46bcbbef1"),
+    "taxels/3": ("bddcbde5abe0", "62c573a8750a"),
+    "taxels/4": ("95145256e6df", "7f0c6882e0a9"),
+    "taxels/5": ("98dd6c215322", "815b525adaad"),
+    "taxels/6": ("d70bbed4fafb", "bada0fb05e4d"),
 }
 
 
@@ -60,6 +78,30 @@ def test_every_frozen_row_is_still_registered_with_a_quote_and_a_statistic():
     for name, row in rows.items():
         assert row.quote and row.statistic, name
         assert name in FROZEN, f"{name}: register its digests in FROZEN"
+
+
+def test_every_row_of_every_scene_is_registered():
+    from runs.fidelity.observations import CHECKS, load_scene
+    rows = registered()
+    for scene in CHECKS:
+        assert load_scene(scene), scene
+        numbers = {fn.observation[1] for fn in CHECKS[scene]}
+        assert numbers, scene
+        assert {f"{scene}/{n}" for n in numbers} <= set(rows), f"{scene}: a row without a registration"
+
+
+def test_an_unregistered_row_is_refused(monkeypatch):
+    from runs.fidelity import observations
+    calls = []
+
+    def check(probe):
+        calls.append(probe)
+        return Measured("1", True, "anything")
+    check.observation = ("taxels", "99", "statement", "—")
+    monkeypatch.setitem(observations.CHECKS, "taxels", [check])
+    with pytest.raises(RuntimeError, match="not registered"):
+        run_checks("taxels", None)
+    assert not calls, "an unregistered row must be refused before it is measured"
 
 
 def test_a_row_is_registered_once():
