@@ -71,6 +71,7 @@ from data.splits.indices import carve_validation
 from models.capabilities import capabilities, declare
 from models.epoch_callback import member_callback
 from models.estimator_base import TouchstoneEstimator
+from models.mixture_weights import above_floor_weights
 from models.paired_accuracy import accuracy_difference, best_reachable_z, significantly_better
 
 log = logging.getLogger(__name__)
@@ -386,11 +387,11 @@ class ValidationChoice(TouchstoneEstimator):
         fewer than two candidates beat that."""
         key = "r2" if self.task_ == "regression" else "accuracy"
         floor = 0.0 if self.task_ == "regression" else self.majority_accuracy_
-        above = {n: s[key] - floor for n, s in self.scores_.items() if n in self.models_ and s[key] > floor}
-        if len(above) < 2:
+        names = [n for n in self.scores_ if n in self.models_]
+        weights = above_floor_weights([self.scores_[n][key] for n in names], floor)
+        if np.sum([self.scores_[n][key] > floor for n in names]) < 2:
             return None
-        total = sum(above.values())
-        return {n: v / total for n, v in above.items()}
+        return {n: float(w) for n, w in zip(names, weights) if w > 0}
 
     def _reason(self, ranks) -> str:
         metric = "R^2" if self.task_ == "regression" else "accuracy"

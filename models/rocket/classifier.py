@@ -1,5 +1,6 @@
 """The ROCKET-family classifier behind the estimator contract: a random-kernel transform
-(`member`: MiniRocket, models/rocket/minirocket.py, or Hydra + MiniRocket, models/rocket/hydra.py),
+(`member`: MiniRocket, models/rocket/minirocket.py, or Hydra + MiniRocket, models/rocket/hydra.py;
+models/rocket/mixture.py mixes members, each a head on its columns of one transform),
 its features standardised (Hydra's by its own sparse scaler), and a linear head.
 
 Heads, as the papers advise: up to `ridge_max_samples` training windows, ridge regression onto
@@ -107,8 +108,7 @@ class RocketClassifier(TouchstoneClassifier):
         self.channel_mean_, self.channel_std_ = mean_and_scale(X, axis=(0, 2), keepdims=True)
         X = self._scaled(X)
         rng = np.random.default_rng(self.seed)
-        self.module_ = (MiniRocket(X.shape[1], X.shape[2], self.n_features, n_classes) if self.member == "minirocket"
-                        else HydraMiniRocket(X.shape[1], X.shape[2], self.n_features, n_classes, self.seed))
+        self.module_ = self._new_module(X.shape[1], X.shape[2], n_classes)
         self.module_.fit_biases(X, rng, self._chunk(X.shape))
         features = self._features(X)
         feature_mean, feature_scale = mean_and_scale(features)
@@ -116,14 +116,25 @@ class RocketClassifier(TouchstoneClassifier):
         feature_mean[prescaled:], feature_scale[prescaled:] = 0.0, 1.0
         Z = (features - feature_mean) / feature_scale
         self.head_ = self.head if self.head != "auto" else ("ridge" if len(X) <= self.ridge_max_samples else "logistic")
-        weights, intercept, loo_logits = self._head(Z, y, n_classes, report=True)
-        self._held_out(Z, y, n_classes, loo_logits, groups)
+        weights, intercept, self.out_of_fold_proba_, self.out_of_fold_method_ = self._fitted_head(Z, y, n_classes, groups)
         with torch.no_grad():  # standardisation and head folded: logits = features @ W' + b'
             folded = weights / feature_scale[:, None]
             self.module_.head.weight.copy_(torch.from_numpy(folded.T.astype(np.float32)))
             self.module_.head.bias.copy_(torch.from_numpy((intercept - feature_mean @ folded).astype(np.float32)))
         self.n_features_in_ = X.shape[1]
         return self
+
+    def _new_module(self, n_channels: int, length: int, n_classes: int):
+        """The transform and its (not yet fitted) linear head, of the member asked for."""
+        if self.member == "minirocket":
+            return MiniRocket(n_channels, length, self.n_features, n_classes)
+        return HydraMiniRocket(n_channels, length, self.n_features, n_classes, self.seed)
+
+    def _fitted_head(self, Z, y, n_classes, groups):
+        """(weights, intercept) of the head on standardised features Z, giving the module's head
+        outputs, and the held-out probabilities of the training windows with how they were held out."""
+        weights, intercept, loo_logits = self._head(Z, y, n_classes, report=True)
+        return weights, intercept, *self._held_out(Z, y, n_classes, loo_logits, groups)
 
     def _head(self, Z, y, n_classes, report=False):
         """(weights, intercept) giving logits, and the leave-one-out logits (ridge) or None."""
@@ -139,22 +150,19 @@ class RocketClassifier(TouchstoneClassifier):
             log.info("ridge head: alpha %.3g by leave-one-out, softmax temperature %.3g", fit.alpha, temperature)
         return fit.coef * temperature, fit.intercept * temperature, fit.loo_predictions * temperature
 
-    def _held_out(self, Z, y, n_classes, loo_logits, groups):
-        """out_of_fold_proba_: each training window predicted by a head fitted without its recording."""
+    def _held_out(self, Z, y, n_classes, loo_logits, groups) -> tuple[np.ndarray, str]:
+        """(each training window's probabilities from a head fitted without its recording, how)."""
         groups = np.arange(len(y)) if groups is None else np.asarray(groups)
         if len(groups) != len(y):
             raise InputError(f"{len(groups)} recording ids for {len(y)} training windows")
         if loo_logits is not None and np.unique(groups).size == len(y):
-            self.out_of_fold_proba_ = np.exp(log_softmax(loo_logits, axis=1))
-            self.out_of_fold_method_ = "leave-one-out"
-            return
+            return np.exp(log_softmax(loo_logits, axis=1)), "leave-one-out"
         logits = np.zeros((len(y), n_classes))
         folds = stratified_folds(y, groups, self.n_folds, self.seed)
         for fit_rows, held_rows in folds:
             weights, intercept, _ = self._head(Z[fit_rows], y[fit_rows], n_classes)
             logits[held_rows] = Z[held_rows] @ weights + intercept
-        self.out_of_fold_proba_ = np.exp(log_softmax(logits, axis=1))
-        self.out_of_fold_method_ = f"{len(folds)} stratified folds"
+        return np.exp(log_softmax(logits, axis=1)), f"{len(folds)} stratified folds"
 
     def _logistic(self, Z, y, n_classes):
         model = LogisticRegression(C=self.logistic_c, max_iter=self.logistic_max_iter).fit(Z, y)

@@ -20,7 +20,8 @@ ROOT = Path(__file__).resolve().parents[2]
 CLASSIFIERS = {"prcnn", "rescnn", "inceptiontime", "lstm_fcn",   # tested in tests/models/nets/test_nets.py
                "inceptiontime_ensemble",                          # its averaging in tests/models/nets/test_recipes.py
                "fcn"}                                             # a new module by one file: tests/models/test_bring_your_own.py
-ROCKET_CLASSIFIERS = {"minirocket", "hydra_minirocket"}           # tested in tests/runs/test_rocket_runs.py, tests/models/rocket/test_hydra.py
+ROCKET_CLASSIFIERS = {"minirocket", "hydra_minirocket", "rocket_mixture"}   # tested in tests/runs/test_rocket_runs.py,
+                                                                   # tests/models/rocket/test_hydra.py, test_mixture.py
 TABLE_CLASSIFIERS = {"mlp", "logistic_regression"}                # tested in tests/runs/test_table_classification.py
 LIBRARY_CLASSIFIERS = {"gradient_boosting"}                       # by its YAML alone: tests/models/test_bring_your_own.py
 MODELS = sorted(p.stem for p in (ROOT / "configs" / "model").glob("*.yaml")

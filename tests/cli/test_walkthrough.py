@@ -107,7 +107,7 @@ def test_an_npz_of_recordings_without_a_model_trains_the_default_choice(tmp_path
     run = train(tmp_path, "data=recordings_npz", "data.path=rig.npz", "model.budget_s=0.001")
     choice = json.loads((run / "metrics.json").read_text())["choice"]
     assert choice["chosen"] == "minirocket"
-    assert set(choice["skipped"]) == {"hydra_minirocket", "prcnn", "rescnn", "inceptiontime"}
+    assert set(choice["skipped"]) == {"hydra_minirocket", "rocket_mixture", "prcnn", "rescnn", "inceptiontime"}
     assert (predict(tmp_path, run, "rig.npz")["predicted"] == y).mean() >= 0.8  # chance: 1/3
     result = command("train.py", "data=recordings_npz", "data.path=rig.npz", "model=blend",
                      f"hydra.run.dir={tmp_path / 'refused'}", cwd=tmp_path)

@@ -24,6 +24,7 @@ from models.kfold_blend import KFoldBlend
 from models.nets.rescnn import ResCNN
 from models.resmlp_regressor import ResMLPRegressor
 from models.rocket.classifier import RocketClassifier
+from models.rocket.mixture import MixedRocketClassifier
 from models.rocket.minirocket import MIN_LENGTH
 from models.timeseries_classifier import TimeSeriesClassifier
 from models.trees import TreeRegressor
@@ -97,6 +98,7 @@ CLASSIFIERS = [
     TableClassifier("mlp", hidden_layer_sizes=(16,), max_iter=300),
     RowsAsWindows(RocketClassifier(n_features=84 * 4)),
     RowsAsWindows(RocketClassifier(n_features=84 * 4, member="hydra_minirocket")),
+    RowsAsWindows(MixedRocketClassifier(n_features=84 * 4)),
     RowsAsWindows(tiny_window_net()),
 ]
 CHOICE = [ValidationChoice({"dt": TreeRegressor(kind="decision_tree", max_features=None), "et": tiny_forest()},
@@ -117,6 +119,7 @@ EXPECTED_FAILURES = {
     "TableClassifier(random_forest)": {"check_non_transformer_estimators_n_iter": TREE_KINDS_HAVE_NO_ITERATIONS},
     "TableClassifier(decision_tree)": {"check_non_transformer_estimators_n_iter": TREE_KINDS_HAVE_NO_ITERATIONS},
     "RowsAsWindows(RocketClassifier)": ONE_WINDOW,
+    "RowsAsWindows(MixedRocketClassifier)": ONE_WINDOW,
     "RowsAsWindows(TimeSeriesClassifier)": ONE_WINDOW,
     "ValidationChoice": {
         "check_estimator_sparse_array": "the choice hands X to its candidates untouched (a table or windows); "

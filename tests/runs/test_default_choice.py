@@ -64,7 +64,7 @@ def test_recordings_without_a_model_train_the_choice_within_its_budget(compose_c
     choice = metrics["choice"]
     assert choice["task"] == "recordings" and choice["chosen"] == "minirocket" and list(choice["validation"]) == [
         "minirocket"]
-    assert list(choice["skipped"]) == ["hydra_minirocket", "prcnn", "rescnn", "inceptiontime"]   # by relative cost
+    assert list(choice["skipped"]) == ["hydra_minirocket", "rocket_mixture", "prcnn", "rescnn", "inceptiontime"]   # by relative cost
     assert all("model.budget_s=0.001" in reason for reason in choice["skipped"].values())
     assert (tmp_path / "run" / "model.onnx").is_file()
 
@@ -73,7 +73,7 @@ def test_recordings_choose_the_better_model_on_validation_when_the_budget_allows
     path = recordings(tmp_path / "rig.npz")
     cfg = compose_config(["data=recordings_npz", f"data.path={path}", "trainer.max_epochs=2", "trainer.progress=false",
                           "model.budget_s=null", "model.candidates.recordings.hydra_minirocket.n_features=840",
-                          "model.skip_unwinnable=false", "~model.candidates.recordings.minirocket",
+                          "model.skip_unwinnable=false", "~model.candidates.recordings.minirocket", "~model.candidates.recordings.rocket_mixture",
                           "~model.candidates.recordings.rescnn", "~model.candidates.recordings.inceptiontime"])
     metrics = run(cfg, tmp_path / "run")
     choice = metrics["choice"]
@@ -110,7 +110,7 @@ def test_a_declared_train_test_split_chooses_on_held_out_training_predictions_an
     overrides = ["data=recordings_npz", f"data.path={tmp_path / 'rig.npz'}", "trainer.max_epochs=2",
                  "trainer.progress=false", "model.budget_s=null", "cost.onnx_latency_calls=0",
                  "model.candidates.recordings.hydra_minirocket.n_features=840", "model.skip_unwinnable=false",
-                 "~model.candidates.recordings.minirocket",
+                 "~model.candidates.recordings.minirocket", "~model.candidates.recordings.rocket_mixture",
                  "~model.candidates.recordings.rescnn", "~model.candidates.recordings.inceptiontime"]
     metrics = run(compose_config(overrides), tmp_path / "run")
     choice = metrics["choice"]
@@ -144,7 +144,7 @@ def test_the_default_fits_no_costlier_candidate_that_could_not_win_and_says_what
         metrics = run(compose_config(overrides), tmp_path / "run")
     choice = metrics["choice"]
     assert choice["chosen"] == "minirocket" and list(choice["validation"]) == ["minirocket"]
-    assert list(choice["skipped"]) == ["hydra_minirocket", "prcnn", "rescnn", "inceptiontime"]
+    assert list(choice["skipped"]) == ["hydra_minirocket", "rocket_mixture", "prcnn", "rescnn", "inceptiontime"]
     assert all("can be significantly more accurate" in why and "of 24 scored recordings" in why
                for why in choice["skipped"].values())
     assert choice["prefer"] == "cheapest_within_noise" and choice["trade"]["kept"] == "minirocket"
