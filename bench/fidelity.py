@@ -41,6 +41,7 @@ from runs.fidelity.rubber12 import (  # noqa: E402
     mirror_ambiguity_worst_at_edges,
 )
 from runs.fidelity.rubber12_sizing import size_cycle_gain  # noqa: E402
+from runs.fidelity.registered import registration  # noqa: E402
 from runs.fidelity.fingertip import algorithm1_diagnostic, diagnostic_markdown  # noqa: E402
 from data.preprocessing.features import FEATURE_GROUPS, compute_features  # noqa: E402
 
@@ -92,12 +93,15 @@ MEASURED_CODE = ["runs/fidelity/", "data/", "models/", "configs/scene/"]
 
 
 def record_rows(record, rows, config: str):
-    """One record per row: the verdict, the words it is shown in, and the raw numbers per seed."""
+    """One record per row: the verdict, the words it is shown in, the row's registration (the paper's
+    quoted words and the statistic, runs/fidelity/registered/) and the raw numbers per seed."""
     for row in rows:
+        registered = registration(row.scene, row.number)
         record.add(f"{row.scene}/{row.number}",
                    {"number": row.number, "statement": row.statement, "paper": row.paper, "config": config,
                     "value": row.measured.value, "holds": row.measured.holds, "tolerance": row.measured.tolerance,
-                    "unsupported": row.measured.unsupported, "numbers": row.measured.numbers},
+                    "unsupported": row.measured.unsupported, "numbers": row.measured.numbers,
+                    "quote": registered.quote, "statistic": registered.statistic},
                    seeds=row.measured.numbers.get("seeds", SEEDS))
 
 

@@ -119,8 +119,12 @@ def fidelity_table(scene: str):
     missing = [f"- **{r['values']['number']}**: {r['values']['unsupported']}" for r in records
                if r["values"].get("unsupported")]
     unsupported = ("\n\nNot supported by the paper (not counted):\n\n" + "\n".join(missing)) if missing else ""
+    quoted = [f"- **{r['values']['number']}**: {r['values']['quote']} — measured as: {r['values']['statistic']}"
+              for r in records if r["values"].get("quote")]
+    registered = (f"\n\nThe paper's words each row is registered with (`runs/fidelity/registered/{scene}.py`), and "
+                  "the statistic:\n\n" + "\n".join(quoted)) if quoted else ""
     return (f"**{held} of {len(supported)} rows the paper supports hold** (`scene={records[0]['values']['config']}`)"
-            f"\n\n" + "\n".join(lines) + unsupported), records
+            f"\n\n" + "\n".join(lines) + unsupported + registered), records
 
 
 for _scene in FIDELITY_SCENES:
