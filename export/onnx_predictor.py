@@ -74,10 +74,13 @@ class Regression(Kind):
             low_high = clip_columns(np.array([[-np.inf] * len(targets), [np.inf] * len(targets)]), targets)
             predictor.target_range = (low_high[0], low_high[1])
         low, high = predictor.target_range
-        arrays = list(np.clip(prediction, low, high).T)
+
+        def clip(values):   # np.clip's own wrapper costs a stream 2 µs a call; the same two ufuncs bare
+            return np.minimum(np.maximum(values, low), high)
+        arrays = list(clip(prediction).T)
         if "interval_half_width" in out:
             half = out["interval_half_width"].astype(np.float64)
-            lower, upper = np.clip(prediction - half, low, high), np.clip(prediction + half, low, high)
+            lower, upper = clip(prediction - half), clip(prediction + half)
             arrays += [bound[:, k] for k in range(len(targets)) for bound in (lower, upper)]
         return arrays
 

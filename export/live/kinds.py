@@ -20,6 +20,7 @@ RATE_TOLERANCE = 0.01  # relative, as predict.py allows for a file's time column
 class RowStream:
     """A table model: every line is one press, predicted on its own (or with the lines waiting)."""
     unit = "lines"
+    holds_lists = False   # an output row is plain values
 
     def __init__(self, predictor):
         self.predictor = predictor
@@ -41,6 +42,7 @@ class WindowStream:
     The window lives in a ring written twice (steps k and k + W), so the newest W steps are
     always one contiguous slice and nothing is shifted per line."""
     unit = "lines"
+    holds_lists = False
 
     def __init__(self, predictor, hop: int | None = None):
         self.predictor = predictor
@@ -103,6 +105,7 @@ class TrackerStream:
     exported force model, which reads the 3 x 3 window around a contact's peak."""
     unit = "frames"
     columns = ["contacts", "id", "x_mm", "y_mm", "force_n"]
+    holds_lists = True    # a frame's contacts: a list per column
 
     def __init__(self, predictor, rows: int, cols: int, pitch_mm: float, n_rest_frames: int):
         if predictor.kind != "regression" or predictor.channels != window_channel_names() \
@@ -148,8 +151,10 @@ def _rows(predictor, lines, values, model_time) -> list:
     """One model call for the stacked inputs: an output row per line, or why it is refused."""
     raw = model_time.call(predictor.run_graph, values)
     out = dict(zip(predictor.outputs, raw))
-    finite = np.logical_and.reduce([np.isfinite(r).all(axis=1) for r in raw])
     arrays = predictor.reads.arrays(predictor, out)
     rows = zip(*[a.tolist() for a in arrays])
+    if all(np.isfinite(r).all() for r in raw):   # the usual case, without a per-row pass
+        return [(number, stamp, list(row)) for (number, stamp, _), row in zip(lines, rows)]
+    finite = np.logical_and.reduce([np.isfinite(r).reshape(len(r), -1).all(axis=1) for r in raw])
     return [(number, stamp, list(row) if ok else "the model's output is not finite (NaN or inf)")
             for (number, stamp, _), row, ok in zip(lines, rows, finite)]

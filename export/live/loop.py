@@ -27,7 +27,7 @@ def run_stream(source, kind, backlog, writer_args: tuple, on_bad_line: str = "sk
         raise InputError(f"on_bad_line must be one of {', '.join(BAD_LINE)}, got {on_bad_line!r}")
     parser, summary = LineFormat(kind.input_columns), Summary()
     output, fmt = writer_args
-    writer = Writer(output, fmt, ["line", "time_s"] + kind.columns + ["latency_us"])
+    writer = Writer(output, fmt, ["line", "time_s"] + kind.columns + ["latency_us"], kind.holds_lists)
     opened, cpu = time.perf_counter(), time.process_time()
     kept = False
     try:

@@ -11,6 +11,7 @@ import time
 LOWEST_US, HIGHEST_US = 0.1, 1e8
 BINS_PER_E = 200          # e-fold per 200 bins: each bin 0.5 % wide
 N_BINS = int(math.log(HIGHEST_US / LOWEST_US) * BINS_PER_E) + 1
+LOG_LOWEST = math.log(LOWEST_US)
 
 
 class LatencyHistogram:
@@ -20,8 +21,8 @@ class LatencyHistogram:
         self.total_us = 0.0
 
     def add(self, us: float) -> None:
-        k = int(math.log(max(us, LOWEST_US) / LOWEST_US) * BINS_PER_E) if us > LOWEST_US else 0
-        self.counts[min(k, N_BINS - 1)] += 1
+        k = int((math.log(us) - LOG_LOWEST) * BINS_PER_E) if us > LOWEST_US else 0
+        self.counts[k if k < N_BINS else N_BINS - 1] += 1
         self.n += 1
         self.total_us += us
 

@@ -14,8 +14,8 @@ FORMATS = ("csv", "jsonl")
 
 
 class Writer:
-    def __init__(self, output: str, fmt: str, columns: list[str]):
-        self.columns, self.fmt = columns, fmt
+    def __init__(self, output: str, fmt: str, columns: list[str], holds_lists: bool = False):
+        self.columns, self.fmt, self.holds_lists = columns, fmt, holds_lists
         if output == "-":
             self.file, self.path, self.partial = sys.stdout, None, None
         else:
@@ -29,10 +29,12 @@ class Writer:
             self.file.flush()
 
     def write(self, rows) -> None:
-        """rows: value lists in the column order; lists inside a row (a frame's contacts) are
-        ';'-joined in CSV and kept as lists in JSON."""
+        """rows: value lists in the column order; lists inside a row (a frame's contacts, when
+        `holds_lists`) are ';'-joined in CSV and kept as lists in JSON."""
         if self.fmt == "csv":
-            self._csv.writerows([[";".join(map(str, v)) if isinstance(v, list) else v for v in row] for row in rows])
+            if self.holds_lists:
+                rows = [[";".join(map(str, v)) if isinstance(v, list) else v for v in row] for row in rows]
+            self._csv.writerows(rows)
         else:
             self.file.write("".join(json.dumps(dict(zip(self.columns, row))) + "\n" for row in rows))
         self.file.flush()
