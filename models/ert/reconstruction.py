@@ -4,6 +4,8 @@ from the unloaded frame) to (x_mm, y_mm, force_n), fitted on presses of the sens
 and able to say what it chose on those presses. The studies (runs/studies/ert_tests.py) and the
 benches handle every reconstruction through this contract and the registry (registry.py),
 never by its class."""
+import time
+
 import numpy as np
 from sklearn.base import BaseEstimator, RegressorMixin
 from sklearn.utils.validation import check_is_fitted
@@ -49,3 +51,14 @@ class ERTReconstruction(RegressorMixin, BaseEstimator):
 def localisation_mm(xy: np.ndarray, targets: np.ndarray) -> float:
     """Mean distance between positions (n, 2) and the targets' x_mm, y_mm."""
     return float(np.hypot(*(xy - targets[:, :2]).T).mean())
+
+
+def per_frame_ms(predict, frames: np.ndarray, calls: int = 50) -> float:
+    """Median milliseconds of `predict` on one frame at a time (batch 1), cycling through `frames`."""
+    times = []
+    for k in range(calls):
+        frame = frames[k % len(frames)][None]
+        start = time.perf_counter()
+        predict(frame)
+        times.append(time.perf_counter() - start)
+    return 1e3 * float(np.median(times))

@@ -11,6 +11,13 @@ its own noise: a calibration recording (protocol `calibration`) fits the Tikhono
 separate recordings test it; `reconstruction.kind` picks another by its name in
 models/ert/registry.py. Results are mean +- sd over presses per seed, then over seeds.
 
+`experiment=ert_localisation` reports the paper's reconstruction (Tikhonov) as its reference row
+and, beside it, the best of `compare.kinds` (GREIT and the learned inverses of
+models/ert/registry.py) chosen on validation sensors (`compare.validation_seeds`: neither the test
+sensors nor any kind's training sensors), each validation sensor calibrated and tested exactly as
+a test sensor is; the chosen kind is then run on the test sensors, with its cost (fit time per
+sensor, per-frame time at batch 1, the whole comparison's wall time).
+
 Limit of quantification: 10 x the sd of the force estimated on blank frames (nothing pressed;
 IUPAC, Currie, Anal. Chem. 40, 1968), divided by the indenter's area for a pressure. The paper's
 supplementary procedure is not given.
@@ -21,6 +28,8 @@ mean) is compared with the pressure at the mid-point; one-sided paired t-test (H
 dips between the contacts). The discrimination distance is the smallest distance from which
 every larger distance is significant at `significance`.
 """
+import logging
+import time
 from pathlib import Path
 
 import matplotlib
@@ -33,6 +42,7 @@ from scipy import stats
 from common.atomic import atomic_write_text
 from common.errors import InputError
 from data.scenes.contract import random_generator_for
+from models.ert.reconstruction import per_frame_ms
 from models.ert.registry import RECONSTRUCTIONS, reconstruction_class
 from runs.report.figure_files import write_figures
 from runs.report.plots import panel_grid
@@ -41,6 +51,7 @@ from runs.report.metrics_file import mean_sd
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 
+log = logging.getLogger(__name__)
 PAPER_NAME = "the ERT internal-electrode study"   # our copy has no title, authors or venue
 PAPER = {
     "ert_internal": {"localisation_mm": [8.13, 4.32], "force_error_n": [2.00, 1.18], "force_r": 0.983,
@@ -105,13 +116,16 @@ def limit_of_quantification(cfg, seed, model, n_blank: int) -> dict:
 def single_point_study(cfg, seeds=(0, 1, 2), calibration=None, reconstruction=None,
                        test_forces_n=(10.0,), n_blank=100) -> tuple[pd.DataFrame, dict]:
     """Presses on the 18 x 18 grid at `test_forces_n` for every seed: a frame of predictions."""
-    rows, loq, val = [], [], []
+    rows, loq, val, cost = [], [], [], []
     for seed in seeds:
+        began = time.perf_counter()
         scene, model = calibrate(cfg, seed, _plain(calibration) or {}, _plain(reconstruction) or {})
+        fit_s = time.perf_counter() - began
         forces = sorted(float(f) for f in test_forces_n)
         test = scene_for(cfg, seed=seed, protocol="single_point", n_force_levels=len(forces),
                          force_range_n=[forces[0], forces[-1]]).generate()
         prediction = model.predict(test.channels)
+        cost.append({"seed": seed, "fit_s": fit_s, "per_frame_ms": per_frame_ms(model.predict, test.channels)})
         frame = pd.DataFrame(test.targets, columns=["x_mm", "y_mm", "force_n"])
         frame[["x_pred_mm", "y_pred_mm", "force_pred_n"]] = prediction
         frame["seed"] = seed
@@ -121,20 +135,81 @@ def single_point_study(cfg, seeds=(0, 1, 2), calibration=None, reconstruction=No
         loq.append({"seed": seed, "chosen": model.chosen_hyperparameters(),
                     **limit_of_quantification(cfg, seed, model, n_blank)})
         val.append(model.validation_localisation_mm())
-    return pd.concat(rows, ignore_index=True), {"loq": loq, "val_localisation_mm": val}
+    return pd.concat(rows, ignore_index=True), {"loq": loq, "val_localisation_mm": val, "cost": cost}
+
+
+def localisation_per_seed(frame: pd.DataFrame, extra: dict) -> pd.DataFrame:
+    """Mean and sd of the localisation error per seed, over the presses at or above that sensor's
+    limit of quantification (the paper's §5.1 rule); `frame` gains the column `above_loq`."""
+    loq = {row["seed"]: row["loq_n"] for row in extra["loq"]}
+    frame["above_loq"] = frame.force_n >= frame.seed.map(loq)
+    return frame[frame.above_loq].groupby("seed").error_mm.agg(["mean", "std"])
+
+
+def checked_comparison(kinds, validation_seeds, seeds) -> tuple[list[str], list[int]]:
+    """(kinds, validation seeds) of a comparison, refused in one line when a kind is not a learned or
+    GREIT reconstruction of the registry or the validation sensors are missing or hold a test sensor."""
+    kinds, validation_seeds = list(kinds or []), [int(s) for s in validation_seeds or []]
+    if not kinds:
+        return [], validation_seeds
+    if not validation_seeds or set(validation_seeds) & {int(s) for s in seeds}:
+        raise InputError(f"ert_localisation: compare.validation_seeds {validation_seeds} must be given and hold none "
+                         f"of the test sensors {list(seeds)}")
+    unknown = [kind for kind in kinds if kind not in RECONSTRUCTIONS or kind == DEFAULT_KIND]
+    if unknown:
+        raise InputError(f"ert_localisation: compare.kinds {unknown} are not learned or GREIT reconstructions of "
+                         f"models/ert/registry.py (expected some of "
+                         f"{', '.join(k for k in RECONSTRUCTIONS if k != DEFAULT_KIND)})")
+    return kinds, validation_seeds
+
+
+def best_reconstruction(cfg, kinds, validation_seeds, seeds, calibration=None, reconstruction=None,
+                        test_force_n=10.0, n_blank=100) -> dict | None:
+    """The kind of `kinds` with the lowest mean localisation error on the validation sensors, then
+    its localisation on the test sensors `seeds`, with its cost. None when `kinds` is empty."""
+    kinds, validation_seeds = checked_comparison(kinds, validation_seeds, seeds)
+    if not kinds:
+        return None
+    began = time.perf_counter()
+    base = dict(_plain(reconstruction) or {})
+    validation = {}
+    for kind in kinds:
+        start = time.perf_counter()
+        frame, extra = single_point_study(cfg, validation_seeds, calibration, {**base, "kind": kind},
+                                          (test_force_n,), n_blank)
+        validation[kind] = {"localisation_mm": mean_sd(localisation_per_seed(frame, extra)["mean"]),
+                            "seconds": time.perf_counter() - start}
+    chosen = min(kinds, key=lambda kind: validation[kind]["localisation_mm"]["mean"])
+    frame, extra = single_point_study(cfg, seeds, calibration, {**base, "kind": chosen}, (test_force_n,), n_blank)
+    per_seed = localisation_per_seed(frame, extra)
+    return {"kind": chosen, "chosen_on": f"validation sensors {validation_seeds}",
+            "validation": validation,
+            "localisation_mm": mean_sd(per_seed["mean"]), "localisation_sd_mm": mean_sd(per_seed["std"]),
+            "presses_used": int(frame.above_loq.sum()), "presses": len(frame),
+            "reconstruction_cost": {"fit_s": mean_sd([c["fit_s"] for c in extra["cost"]]),
+                                    "per_frame_ms": mean_sd([c["per_frame_ms"] for c in extra["cost"]]),
+                                    "comparison_wall_s": time.perf_counter() - began},
+            "chosen": [r["chosen"] for r in extra["loq"]]}
 
 
 def run_localisation(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None, reconstruction=None, test_force_n=10.0,
-                     n_blank=100) -> dict:
+                     n_blank=100, compare=None) -> dict:
     """Single-point localisation (the ERT study's §5.1, fig. 12): error of the field's peak, presses
-    above the limit of quantification only."""
+    above the limit of quantification only. The top-level figures are the reference row (the
+    paper's Tikhonov unless reconstruction.kind says otherwise); `best` is the best of
+    `compare.kinds` chosen on `compare.validation_seeds` (module docstring), None without kinds."""
     output_dir = Path(output_dir)
+    compare = _plain(compare) or {}
+    checked_comparison(compare.get("kinds"), compare.get("validation_seeds"), seeds)     # before any sensor is run
+    began = time.perf_counter()
     frame, extra = single_point_study(cfg, seeds, calibration, reconstruction, (test_force_n,), n_blank)
-    loq = {row["seed"]: row["loq_n"] for row in extra["loq"]}
-    frame["above_loq"] = frame.force_n >= frame.seed.map(loq)
+    per_seed = localisation_per_seed(frame, extra)
     used = frame[frame.above_loq]
-    per_seed = used.groupby("seed").error_mm.agg(["mean", "std"])
-    metrics = {"scene": cfg.scene.name, "seeds": list(seeds),
+    reference_kind = (_plain(reconstruction) or {}).get("kind", DEFAULT_KIND)
+    metrics = {"scene": cfg.scene.name, "seeds": list(seeds), "kind": reference_kind,
+               "reconstruction_cost": {"fit_s": mean_sd([c["fit_s"] for c in extra["cost"]]),
+                                       "per_frame_ms": mean_sd([c["per_frame_ms"] for c in extra["cost"]]),
+                                       "wall_s": time.perf_counter() - began},
                "localisation_mm_per_seed": [{"seed": int(s), "mean": float(r["mean"]), "sd": float(r["std"])}
                                             for s, r in per_seed.iterrows()],
                "localisation_mm": mean_sd(per_seed["mean"]),           # mean (over seeds) of per-seed means
@@ -143,7 +218,16 @@ def run_localisation(cfg, output_dir, logger, seeds=(0, 1, 2), calibration=None,
                "loq_kpa": mean_sd([r["loq_kpa"] for r in extra["loq"]]),
                "chosen": [r["chosen"] for r in extra["loq"]],
                "paper": PAPER.get(cfg.scene.name, {}),
-               "val": {"localisation_mm": float(np.mean(extra["val_localisation_mm"]))}}
+               "val": {"localisation_mm": float(np.mean(extra["val_localisation_mm"]))},
+               "best": best_reconstruction(cfg, compare.get("kinds"), compare.get("validation_seeds"), seeds,
+                                           calibration, reconstruction, test_force_n, n_blank)}
+    if metrics["best"] is not None:
+        best = metrics["best"]
+        cost = best["reconstruction_cost"]
+        log.info(f"localisation: {reference_kind} (reference) {metrics['localisation_mm']['mean']:.2f} mm; best of "
+                 f"{', '.join(best['validation'])} on validation sensors: {best['kind']} "
+                 f"{best['localisation_mm']['mean']:.2f} mm (fit {cost['fit_s']['mean']:.1f} s per sensor, "
+                 f"{cost['per_frame_ms']['mean']:.3f} ms per frame)")
     electrodes = OmegaConf.to_container(cfg.scene.electrodes_mm, resolve=True)
     figure = _error_map(frame[frame.seed == seeds[0]], cfg.scene.side_mm, electrodes, metrics)
     write_figures(output_dir, {"localisation_map": figure}, logger, prefix="ert")

@@ -16,7 +16,8 @@ TINY = ["study.seeds=[0,1]", "study.calibration.grid_points_per_side=4", "scene.
     ("ert_force", ["force.png", "force.csv"]),
 ])
 def test_single_point_studies_write_their_tables(compose_config, tmp_path, experiment, files):
-    cfg = compose_config([f"experiment={experiment}", "scene=ert_boundary", *TINY, "study.n_blank=10"])
+    no_comparison = ["study.compare.kinds=[]"] if experiment == "ert_localisation" else []
+    cfg = compose_config([f"experiment={experiment}", "scene=ert_boundary", *TINY, "study.n_blank=10", *no_comparison])
     metrics = run(cfg, tmp_path)
     for name in files + ["metrics.json"]:
         assert (tmp_path / name).exists(), name
@@ -28,6 +29,57 @@ def test_single_point_studies_write_their_tables(compose_config, tmp_path, exper
     assert set(written[key]) == {"mean", "sd", "n"} and written[key]["n"] == 2
     assert 0.0 < written[key]["mean"] < 200.0 and written[key]["sd"] >= 0.0
     assert list((tmp_path / "tensorboard").glob("*/events.out.tfevents.*"))
+
+
+TINY_GREIT = {"pixels_per_side": 12, "desired_radius_mm": [15.0], "noise_weights": [1e-2], "n_training_sensors": 2,
+              "presses_per_sensor": 120}
+
+
+def test_localisation_reports_the_best_kind_chosen_on_validation_sensors_beside_tikhonov(compose_config, tmp_path,
+                                                                                         monkeypatch):
+    from runs.studies import ert_tests
+
+    studied = []
+    original = ert_tests.single_point_study
+
+    def spy(cfg, seeds, calibration, reconstruction, *args):
+        studied.append((tuple(seeds), (reconstruction or {}).get("kind", "tikhonov")))
+        return original(cfg, seeds, calibration, reconstruction, *args)
+
+    monkeypatch.setattr(ert_tests, "single_point_study", spy)
+    cfg = compose_config(["experiment=ert_localisation", "scene=ert_boundary", *TINY, "study.n_blank=10",
+                          "study.compare.validation_seeds=[30000,30001]", "study.compare.kinds=[greit,greit_learned]",
+                          *[f"+study.reconstruction.greit.{k}={v}" for k, v in TINY_GREIT.items()],
+                          *[f"+study.reconstruction.greit_learned.{k}={v}" for k, v in TINY_GREIT.items()],
+                          "+study.reconstruction.greit_learned.n_estimators=10"])
+    metrics = run(cfg, tmp_path)
+    best = metrics["best"]
+    # the reference row is Tikhonov's, on the test sensors; both candidates are scored on the
+    # validation sensors only, and only the chosen one on the test sensors
+    assert metrics["kind"] == "tikhonov" and studied[0] == ((0, 1), "tikhonov")
+    assert sorted(studied[1:3]) == [((30000, 30001), "greit"), ((30000, 30001), "greit_learned")]
+    assert studied[3:] == [((0, 1), best["kind"])]
+    scores = {kind: row["localisation_mm"]["mean"] for kind, row in best["validation"].items()}
+    assert best["kind"] == min(scores, key=scores.get)
+    assert best["localisation_mm"]["n"] == 2 and best["localisation_mm"]["mean"] > 0
+    cost = best["reconstruction_cost"]
+    assert cost["fit_s"]["mean"] > 0 and cost["per_frame_ms"]["mean"] > 0 and cost["comparison_wall_s"] > 0
+    assert metrics["reconstruction_cost"]["per_frame_ms"]["mean"] > 0
+    written = json.loads((tmp_path / "metrics.json").read_text())
+    assert written["best"]["kind"] == best["kind"]
+
+
+def test_localisation_refuses_validation_sensors_among_the_test_sensors(compose_config, tmp_path, monkeypatch):
+    from runs.studies import ert_tests
+
+    monkeypatch.setattr(ert_tests, "single_point_study", lambda *args: pytest.fail("a sensor was run"))
+    cfg = compose_config(["experiment=ert_localisation", "scene=ert_boundary", *TINY])
+    with pytest.raises(InputError, match="validation_seeds"):
+        ert_tests.run_localisation(cfg, tmp_path, None, seeds=(0, 1),
+                                   compare={"kinds": ["greit"], "validation_seeds": [1, 30000]})
+    with pytest.raises(InputError, match="not learned or GREIT"):
+        ert_tests.run_localisation(cfg, tmp_path, None, seeds=(0, 1),
+                                   compare={"kinds": ["tikhonov"], "validation_seeds": [30000]})
 
 
 def test_two_point_study_gives_a_p_value_per_location_and_distance(compose_config, tmp_path):
