@@ -48,7 +48,8 @@ from models.deployable import load_pipeline  # noqa: E402
 from runs.run import run  # noqa: E402
 
 # What the soak measures: the live loop and what it calls per line (not the --plot view, which it does not draw).
-MEASURED_CODE = ["predict.py", "export/onnx_predictor.py", "data/readers/stream_lines.py", "models/contact_tracking/"] \
+MEASURED_CODE = ["predict.py", "export/onnx_predictor.py", "export/window_force.py", "data/readers/stream_lines.py",
+                 "models/contact_tracking/"] \
     + [f"export/live/{name}.py" for name in ("sources", "backlog", "kinds", "loop", "writer", "summary")]
 OVERRIDES = {
     "table": ["model=resmlp", "scene.progress=false", "trainer.progress=false", "trainer.max_epochs=20",

@@ -18,23 +18,13 @@ import operator
 
 import numpy as np
 
-from data.readers.table_reader import MODEL_DTYPE_MAX
-from data.units import physical_range
+from data.readers.table_reader import MODEL_DTYPE_MAX, model_value_bounds
 
 TIME_COLUMN = "time_s"
 
 
 class BadLine(ValueError):
     """A line that is not a reading; the message says why, the caller adds where."""
-
-
-def bounds(columns: list[str]) -> tuple[np.ndarray, np.ndarray]:
-    """Per column, the lowest and highest value a model can take: float32's range, narrowed to the
-    unit's physical range where the name carries a unit (a resistance is never negative)."""
-    rules = [physical_range(column) for column in columns]
-    low = np.array([-MODEL_DTYPE_MAX if r is None else max(r.low, -MODEL_DTYPE_MAX) for r in rules])
-    high = np.array([MODEL_DTYPE_MAX if r is None else min(r.high, MODEL_DTYPE_MAX) for r in rules])
-    return low, high
 
 
 class LineFormat:
@@ -44,7 +34,7 @@ class LineFormat:
     def __init__(self, columns: list[str]):
         self.columns = list(columns)
         self.width = len(self.columns)
-        self.low, self.high = bounds(self.columns)
+        self.low, self.high = model_value_bounds(self.columns)
         self.low_list, self.high_list = self.low.tolist(), self.high.tolist()
         self.pick = None         # a header's column index per reading, once a header was read
         self.time_index = None   # the header's time stamp column

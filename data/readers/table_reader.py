@@ -101,6 +101,15 @@ def numeric_column(raw: pd.Series, column: str, what: str, source: str, hint: st
     return values.to_numpy(dtype=np.float64, na_value=np.nan)
 
 
+def model_value_bounds(columns: list[str]) -> tuple[np.ndarray, np.ndarray]:
+    """Per column, the lowest and highest value a model can take: MODEL_DTYPE's range, narrowed to
+    the unit's physical range where the name carries a unit (a resistance is never negative)."""
+    rules = [physical_range(column) for column in columns]
+    low = np.array([-MODEL_DTYPE_MAX if r is None else max(r.low, -MODEL_DTYPE_MAX) for r in rules])
+    high = np.array([MODEL_DTYPE_MAX if r is None else min(r.high, MODEL_DTYPE_MAX) for r in rules])
+    return low, high
+
+
 def check_model_block(frame: pd.DataFrame, columns: list[str], what: str, source: str) -> None:
     """check_model_values on every column, in one pass over the block when all of them hold (a
     scene's table has thousands of channel columns): each column's minimum and maximum decide it
@@ -111,9 +120,7 @@ def check_model_block(frame: pd.DataFrame, columns: list[str], what: str, source
     except (TypeError, ValueError):                    # not numbers: the column-by-column error
         values = np.empty((0, 0))
     if values.shape[1:] == (len(columns),) and len(values):
-        rules = [physical_range(column) for column in columns]
-        low = np.array([-MODEL_DTYPE_MAX if r is None else max(r.low, -MODEL_DTYPE_MAX) for r in rules])
-        high = np.array([MODEL_DTYPE_MAX if r is None else min(r.high, MODEL_DTYPE_MAX) for r in rules])
+        low, high = model_value_bounds(columns)
         if (values.min(axis=0) >= low).all() and (values.max(axis=0) <= high).all():
             return
     for column in columns:

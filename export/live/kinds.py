@@ -11,7 +11,7 @@ from collections import deque
 import numpy as np
 
 from common.errors import InputError
-from data.preprocessing.contact_windows import window_channel_names
+from export.window_force import window_force
 from models.contact_tracking import ContactTracker
 
 RATE_TOLERANCE = 0.01  # relative, as predict.py allows for a file's time column
@@ -108,16 +108,7 @@ class TrackerStream:
     holds_lists = True    # a frame's contacts: a list per column
 
     def __init__(self, predictor, rows: int, cols: int, pitch_mm: float, n_rest_frames: int):
-        if predictor.kind != "regression" or predictor.channels != window_channel_names() \
-                or "force_n" not in predictor.targets:
-            raise InputError(f"{predictor.path}: rows= and cols= track contacts, which needs the force model that "
-                             "reads the 3x3 window to force_n (train.py experiment=capacitive_force "
-                             "scene.characterisation_channels=window)")
-        column = predictor.targets.index("force_n")
-
-        def force(windows):
-            values = np.asarray(windows, dtype=predictor.input_dtype)
-            return np.asarray(predictor.run_graph(values)[0], dtype=np.float64)[:, column]
+        force = window_force(predictor, "predict.py rows=/cols= (contact tracking)", checked=False)
         self.tracker = ContactTracker(rows=rows, cols=cols, pitch_mm=pitch_mm, force_model=force,
                                       force_feature="window")
         self.grid = (rows, cols)

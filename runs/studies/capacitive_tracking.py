@@ -43,9 +43,9 @@ from omegaconf import DictConfig, OmegaConf
 from common.atomic import atomic_write_text
 from common.errors import InputError
 from common.threads import configured_threads
-from data.preprocessing.contact_windows import window_channel_names
 from data.readers.contact_streams import ContactStream, check_grid, frames_from_lines, load_frames
 from export.onnx_predictor import OnnxPredictor
+from export.window_force import window_force
 from models.contact_tracking import ContactTracker
 from models.contact_tracking.force import force_reader
 from models.contact_tracking.timing import latency_summary, timed_updates
@@ -95,13 +95,7 @@ def load_force_model(path: str):
     if not path.is_file():
         raise InputError(f"capacitive_tracking: force_model {path} does not exist (a run folder or its model.onnx)")
     predictor = OnnxPredictor(path, threads=configured_threads() or 1)
-    if predictor.kind != "regression" or predictor.channels != window_channel_names() or "force_n" not in predictor.targets:
-        raise InputError(f"capacitive_tracking: force_model {path} does not read the 3x3 window to force_n; train "
-                         "it with experiment=capacitive_force hydra.mode=RUN scene.characterisation_channels=window")
-    column = predictor.targets.index("force_n")
-
-    def read(windows):
-        return predictor.predict_array(np.asarray(windows, dtype=np.float64))["prediction"][:, column]
+    read = window_force(predictor, "capacitive_tracking: force_model")
     return read, {"model": predictor.metadata.get("model", "unknown"),
                   "reads": "3x3 window of loads around a contact's peak", "loaded_from": str(path)}
 
