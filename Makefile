@@ -84,8 +84,8 @@ bench: install                ## every bench that records (many hours on 2 cores
 	$(BENCH_ENV) $(PY) bench/ddp_step_time.py --repeats 3
 	$(BENCH_ENV) $(PY) bench/model_configs.py
 	$(BENCH_ENV) $(PY) bench/reproduce.py --recordings GunPoint
-	$(PY) bench/test_suite_time.py
-	$(PY) bench/test_suite_time.py --beside-busy
+	$(PY) bench/test_suite_time.py --runs 3
+	$(PY) bench/test_suite_time.py --runs 3 --beside-busy
 	$(PY) docs/generate.py
 
 clean:

@@ -268,6 +268,81 @@ def tsc_peers_default_against_aeon():
     return "\n".join(lines) + "\n\n" + note, records
 
 
+AEON_ROCKET_MEMBERS = ("aeon:minirocket", "aeon:multirocket_hydra")   # aeon's ROCKET family on the bench
+GOAL_METHODS = ("default", "default_most_accurate", "rocket_mixture")
+
+
+def _mean(values) -> float | None:
+    values = [v for v in values if v is not None]
+    return sum(values) / len(values) if values else None
+
+
+@table("tsc_peers/goals")
+def tsc_peers_goals():
+    """Issue 41's accuracy and fit-time goals per set, from the runs that measured aeon and
+    Touchstone in one script run: each method's mean test accuracy against aeon's best ROCKET-family
+    member's (by its mean over the same seeds), and its fit against aeon's MultiRocket-Hydra's."""
+    records = tsc_runs_of(lambda command: " default" in command and "tsc_peers_two_sets" not in command)
+    by = {(r["values"]["set"], r["values"]["method"]): r for r in records}
+    sets = sorted({s for s, m in by if m in GOAL_METHODS})
+    lines = ["| set | aeon's best member (mean accuracy) | method | mean accuracy | − best (points) | "
+             "fit ÷ aeon MultiRocket-Hydra fit | same run as aeon |", "|---|---|---|---|---|---|---|"]
+    tally, used = {}, []
+    for name in sets:
+        members = {m: _mean(by[(name, m)]["values"]["accuracy"]) for m in AEON_ROCKET_MEMBERS if (name, m) in by}
+        if not members:
+            continue
+        best = max(members, key=members.get)
+        used += [by[(name, m)] for m in members]
+        hydra = by.get((name, "aeon:multirocket_hydra"))
+        for method in GOAL_METHODS:
+            record = by.get((name, method))
+            if record is None or _mean(record["values"]["accuracy"]) is None:
+                continue
+            used.append(record)
+            accuracy = _mean(record["values"]["accuracy"])
+            gap = 100 * (accuracy - members[best])
+            ratio = (_mean(record["values"]["fit_s"]) / _mean(hydra["values"]["fit_s"])) if hydra else None
+            same = all(by[(name, m)]["command"] == record["command"] for m in members)
+            tally.setdefault(method, []).append((gap, ratio, same))
+            lines.append(f"| {name} | `{best}` {members[best]:.4f} | `{method}` | {accuracy:.4f} | {gap:+.2f} | "
+                         f"{'—' if ratio is None else f'{ratio:.1f}×'} | {'yes' if same else 'no'} |")
+    summary = []
+    for method, rows in tally.items():
+        gaps = [g for g, _, _ in rows]
+        ratios = [r for _, r, _ in rows if r is not None]
+        summary.append(f"`{method}`: ≥ aeon's best member on {sum(g >= 0 for g in gaps)} of {len(gaps)} sets, "
+                       f"≥ best − 1 point on {sum(g >= -1 for g in gaps)} of {len(gaps)}, mean gap {_mean(gaps):+.2f} "
+                       f"points; fit ≤ 3× aeon's MultiRocket-Hydra on {sum(r <= 3 for r in ratios)} of {len(ratios)}")
+    note = ("Mean test accuracy over the seeds each record holds (official splits, one thread); aeon's best member "
+            "is the better of its MiniRocket and MultiRocket-Hydra on that set. Goals (issue 41): ≥ best on 5 of 8 "
+            "sets, ≥ best − 1 point on all, fit ≤ 3× aeon's MultiRocket-Hydra fit. " + "; ".join(summary) + ".")
+    return "\n".join(lines) + "\n\n" + note, used
+
+
+# ---- the default test suite's time (bench/test_suite_time.py) -----------------------------------
+
+SUITE_CONDITIONS = {"idle": ("idle", 8), "beside_one_busy_process": ("beside one process busy on a core", 15)}
+
+
+@table("readme/test_suite")
+def test_suite_time():
+    """Wall time of `make test` per condition, over the runs of its newest record."""
+    records = [r for r in newest("test_suite") if isinstance(r["values"]["exit_code"], list)]
+    lines = ["| machine | runs | wall time (min) | goal | tests per run: passed / failed / skipped |", "|---|---|---|---|---|"]
+    for record in records:
+        v = record["values"]
+        words, goal_min = SUITE_CONDITIONS[record["name"]]
+        counts = "; ".join(f"{c.get('passed', 0):,} / {c.get('failed', 0) + c.get('error', 0)} / {c.get('skipped', 0)}"
+                           for c in v["counts"])
+        lines.append(f"| {words} | {len(v['wall_s'])} | {format_mean_sd([w / 60 for w in v['wall_s']], '.1f')} | "
+                     f"≤ {goal_min} | {counts} |")
+    note = ("`make test` (pytest -m \"not slow\" -n 2) on this project's 2-core machine, runs one after the other; "
+            "beside a busy process means beside one Python loop spinning a core for the whole run, as a user's "
+            "other job would.")
+    return "\n".join(lines) + "\n\n" + note, records
+
+
 # ---- live streams through predict.py (bench/soak_stream.py) -------------------------------------
 
 @table("live/soak")
