@@ -178,6 +178,7 @@ def best_reconstruction(cfg, kinds, validation_seeds, seeds, calibration=None, r
         frame, extra = single_point_study(cfg, validation_seeds, calibration, {**base, "kind": kind},
                                           (test_force_n,), n_blank)
         validation[kind] = {"localisation_mm": mean_sd(localisation_per_seed(frame, extra)["mean"]),
+                            "per_frame_ms": mean_sd([c["per_frame_ms"] for c in extra["cost"]]),
                             "seconds": time.perf_counter() - start}
     chosen = min(kinds, key=lambda kind: validation[kind]["localisation_mm"]["mean"])
     frame, extra = single_point_study(cfg, seeds, calibration, {**base, "kind": chosen}, (test_force_n,), n_blank)

@@ -61,6 +61,7 @@ def test_localisation_reports_the_best_kind_chosen_on_validation_sensors_beside_
     assert studied[3:] == [((0, 1), best["kind"])]
     scores = {kind: row["localisation_mm"]["mean"] for kind, row in best["validation"].items()}
     assert best["kind"] == min(scores, key=scores.get)
+    assert all(row["per_frame_ms"]["n"] == 2 and row["seconds"] > 0 for row in best["validation"].values())
     assert best["localisation_mm"]["n"] == 2 and best["localisation_mm"]["mean"] > 0
     cost = best["reconstruction_cost"]
     assert cost["fit_s"]["mean"] > 0 and cost["per_frame_ms"]["mean"] > 0 and cost["comparison_wall_s"] > 0
