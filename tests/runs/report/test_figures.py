@@ -96,7 +96,8 @@ ERT = ["study.seeds=[0,1]", "study.calibration.grid_points_per_side=4", "scene.g
 @pytest.mark.parametrize("overrides", [
     ["experiment=ert_injection", "scene=ert_internal", "study.pair_counts=[12,24]"],
     ["experiment=ert_force", "scene=ert_boundary", "scene.injection=adjacent", "study.n_blank=10"],
-    ["experiment=ert_localisation", "scene=ert_boundary", "scene.injection=adjacent", "study.n_blank=10"],
+    ["experiment=ert_localisation", "scene=ert_boundary", "scene.injection=adjacent", "study.n_blank=10",
+     "study.compare.kinds=[]"],
 ])
 def test_the_ert_studies_figures_are_readable(compose_config, tmp_path, written_figures, overrides):
     run(compose_config(overrides + ERT), tmp_path)
