@@ -37,7 +37,7 @@ TOUR = [
     ("taxel_receptive_field", ["train.py", "experiment=taxel_receptive_field", "seed={seed}"],
      "taxels: strain profiles and receptive field vs cover thickness", True),
     ("ert_localisation", ["train.py", "experiment=ert_localisation", "scene=ert_internal", "seed={seed}"],
-     "ERT skin: Tikhonov localisation over the paper's 324 points", True),
+     "ERT skin: the paper's Tikhonov localisation over its 324 points, beside GREIT checked on validation sensors", True),
     ("materials10", ["train.py", "experiment=materials10", "seed={seed}"],
      "fingertip surface recognition, PR-CNN, unseen force levels held out", False),
     ("sweep", ["train.py", "-m", "model=extra_trees,decision_tree", "seed={seed}"],
