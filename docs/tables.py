@@ -286,7 +286,7 @@ def tsc_peers_goals():
     by = {(r["values"]["set"], r["values"]["method"]): r for r in records}
     sets = sorted({s for s, m in by if m in GOAL_METHODS})
     lines = ["| set | aeon's best member (mean accuracy) | method | mean accuracy | − best (points) | "
-             "fit ÷ aeon MultiRocket-Hydra fit | same run as aeon |", "|---|---|---|---|---|---|---|"]
+             "fit ÷ aeon MultiRocket-Hydra fit | same run as aeon | kept, by seed |", "|---|---|---|---|---|---|---|---|"]
     tally, used = {}, []
     for name in sets:
         members = {m: _mean(by[(name, m)]["values"]["accuracy"]) for m in AEON_ROCKET_MEMBERS if (name, m) in by}
@@ -306,7 +306,8 @@ def tsc_peers_goals():
             same = all(by[(name, m)]["command"] == record["command"] for m in members)
             tally.setdefault(method, []).append((gap, ratio, same))
             lines.append(f"| {name} | `{best}` {members[best]:.4f} | `{method}` | {accuracy:.4f} | {gap:+.2f} | "
-                         f"{'—' if ratio is None else f'{ratio:.1f}×'} | {'yes' if same else 'no'} |")
+                         f"{'—' if ratio is None else f'{ratio:.1f}×'} | {'yes' if same else 'no'} | "
+                         f"{', '.join(r['chosen'] for r in record['values']['runs'] if r.get('chosen')) or '—'} |")
     summary = []
     for method, rows in tally.items():
         gaps = [g for g, _, _ in rows]
