@@ -329,13 +329,14 @@ SUITE_CONDITIONS = {"idle": ("idle", 8), "beside_one_busy_process": ("beside one
 @table("readme/test_suite")
 def test_suite_time():
     """Wall time of `make test` per condition, over the runs of its newest record."""
-    records = [r for r in newest("test_suite") if isinstance(r["values"]["exit_code"], list)]
+    records = newest("test_suite")
     lines = ["| machine | runs | wall time (min) | goal | tests per run: passed / failed / skipped |", "|---|---|---|---|---|"]
     for record in records:
         v = record["values"]
         words, goal_min = SUITE_CONDITIONS[record["name"]]
+        runs = v["counts"] if isinstance(v["counts"], list) else [v["counts"]]   # a record of one run keeps a dict
         counts = "; ".join(f"{c.get('passed', 0):,} / {c.get('failed', 0) + c.get('error', 0)} / {c.get('skipped', 0)}"
-                           for c in v["counts"])
+                           for c in runs)
         lines.append(f"| {words} | {len(v['wall_s'])} | {format_mean_sd([w / 60 for w in v['wall_s']], '.1f')} | "
                      f"≤ {goal_min} | {counts} |")
     note = ("`make test` (pytest -m \"not slow\" -n 2) on this project's 2-core machine, runs one after the other; "
