@@ -115,12 +115,15 @@ def test_an_npz_of_recordings_without_a_model_trains_the_default_choice(tmp_path
     assert not (tmp_path / "refused").exists()
 
 
-def test_an_npz_of_recordings(tmp_path):
-    """`python train.py data=recordings_npz data.path=rig.npz model=prcnn` (the README's command),
-    then predict.py on the NPZ (one row per recording) and on the same recordings as a long table
+# PR-CNN (a network, 15 epochs) takes ~55 s of the default suite's 8 min: slow; MiniRocket runs the
+# same reading and predicting path in a few seconds
+@pytest.mark.parametrize("model", ["minirocket", pytest.param("prcnn", marks=pytest.mark.slow)])
+def test_an_npz_of_recordings(tmp_path, model):
+    """`python train.py data=recordings_npz data.path=rig.npz model=<model>` (the README's command
+    with a model named), then predict.py on the NPZ (one row per recording) and on the same recordings as a long table
     with shuffled rows."""
     X, y = save_recordings(tmp_path)
-    run = train(tmp_path, "data=recordings_npz", "data.path=rig.npz", "model=prcnn")
+    run = train(tmp_path, "data=recordings_npz", "data.path=rig.npz", f"model={model}")
     predicted = predict(tmp_path, run, "rig.npz")
     assert predicted["recording"].tolist() == list(range(len(X))) and (predicted["start_step"] == 0).all()
     assert (predicted["predicted"] == y).mean() >= 0.8  # chance: 1/3
