@@ -337,7 +337,7 @@ def test_suite_time():
         runs = v["counts"] if isinstance(v["counts"], list) else [v["counts"]]   # a record of one run keeps a dict
         counts = "; ".join(f"{c.get('passed', 0):,} / {c.get('failed', 0) + c.get('error', 0)} / {c.get('skipped', 0)}"
                            for c in runs)
-        lines.append(f"| {words} | {len(v['wall_s'])} | {format_mean_sd([w / 60 for w in v['wall_s']], '.1f')} | "
+        lines.append(f"| {words} | {len(v['wall_s'])} | {format_mean_sd([w / 60 for w in v['wall_s']], '.2f')} | "
                      f"≤ {goal_min} | {counts} |")
     note = ("`make test` (pytest -m \"not slow\" -n 2) on this project's 2-core machine, runs one after the other; "
             "beside a busy process means beside one Python loop spinning a core for the whole run, as a user's "
